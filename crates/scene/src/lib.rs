@@ -1,1 +1,22 @@
-//! haze's scene: the model the integrators read, and the Mitsuba 3 XML loader that builds it.
+//! haze's scene: the model the integrators read (shapes, BSDFs, media, emitters, camera), ray
+//! intersection, and the Mitsuba 3 XML loader that builds it ([`xml::load_file`]).
+//!
+//! Names follow Mitsuba 3's plugins and parameters (`homogeneous`, `sigma_t`, `hg`, `area`,
+//! `to_world`, ...), so a reader who knows a scene file finds the code that handles it.
+
+pub mod accel;
+pub mod bsdf;
+pub mod camera;
+pub mod emitter;
+pub mod medium;
+pub mod scene;
+pub mod shape;
+pub mod xml;
+
+pub use bsdf::Bsdf;
+pub use camera::Camera;
+pub use emitter::Emitter;
+pub use medium::{Medium, MediumId};
+pub use scene::{IntegratorSpec, Scene, SurfaceInteraction};
+pub use shape::{Geometry, Shape, TriangleMesh};
+pub use xml::{load_file, load_str, LoadError, LoadOptions};

@@ -1,0 +1,38 @@
+//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`).
+
+use glam::{Mat4, Vec3};
+use haze_core::Rgb;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Emitter {
+    /// Isotropic point light; `intensity` in W/sr.
+    Point { position: Vec3, intensity: Rgb },
+    /// Spot light at the origin of `to_world` shining down its local `+z`. Mitsuba 3's falloff:
+    /// full intensity inside `beam_width`, linear in angle down to zero at `cutoff_angle`
+    /// (angles in radians, half-angles from the axis).
+    Spot {
+        to_world: Mat4,
+        intensity: Rgb,
+        cutoff_angle: f32,
+        beam_width: f32,
+    },
+    /// Diffuse area light on shape `shape`, emitting `radiance` on the side its normal points to.
+    Area { shape: u32, radiance: Rgb },
+    /// Uniform environment radiance from every direction at infinity.
+    Constant { radiance: Rgb },
+}
+
+impl Emitter {
+    /// Spot falloff for a direction `d_local` (unit, in the spot's local frame), in `[0, 1]`.
+    pub fn spot_falloff(cutoff_angle: f32, beam_width: f32, d_local: Vec3) -> f32 {
+        let cos_t = d_local.z;
+        if cos_t <= cutoff_angle.cos() {
+            return 0.0;
+        }
+        if cos_t >= beam_width.cos() {
+            return 1.0;
+        }
+        ((cutoff_angle - cos_t.clamp(-1.0, 1.0).acos()) / (cutoff_angle - beam_width))
+            .clamp(0.0, 1.0)
+    }
+}

@@ -1,0 +1,52 @@
+//! Shapes: triangle meshes (`obj`, `ply`, `rectangle`, `cube`) and the analytic `sphere` and
+//! `disk`, each with its BSDF, optional interior/exterior media and optional area emitter.
+
+mod mesh;
+mod primitives;
+
+pub use mesh::TriangleMesh;
+pub use primitives::{cube_mesh, rectangle_mesh};
+
+use crate::bsdf::Bsdf;
+use crate::medium::MediumId;
+use glam::{Mat4, Vec3};
+
+/// Geometry of a shape, in world space.
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    Mesh(TriangleMesh),
+    /// Sphere; normals point outwards (inwards with `flip_normals`).
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        flip_normals: bool,
+    },
+    /// Unit disk in the local `z = 0` plane, normal `+z`, mapped by `to_world` (which may scale
+    /// non-uniformly: a disk can become an ellipse).
+    Disk {
+        to_world: Mat4,
+        flip_normals: bool,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub struct Shape {
+    /// The XML `id` if given, else a description such as `obj "meshes/a.obj"`, for messages.
+    pub name: String,
+    pub geometry: Geometry,
+    pub bsdf: Bsdf,
+    /// Medium on the side opposite the normal.
+    pub interior: Option<MediumId>,
+    /// Medium on the side the normal points to.
+    pub exterior: Option<MediumId>,
+    /// Index into [`crate::Scene::emitters`] of the area emitter attached to this shape.
+    pub emitter: Option<u32>,
+}
+
+impl Shape {
+    /// True if crossing this shape can change the current medium (Mitsuba 3 changes media only
+    /// at shapes that declare an interior or exterior medium).
+    pub fn is_medium_transition(&self) -> bool {
+        self.interior.is_some() || self.exterior.is_some()
+    }
+}
