@@ -8,6 +8,7 @@ pub mod accel;
 pub mod bsdf;
 pub mod camera;
 pub mod emitter;
+pub mod lights;
 pub mod medium;
 pub mod scene;
 pub mod shape;

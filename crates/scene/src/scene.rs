@@ -4,6 +4,7 @@
 use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
+use crate::lights::EmitterTables;
 use crate::medium::{Medium, MediumId};
 use crate::shape::Shape;
 use glam::{Vec2, Vec3};
@@ -60,6 +61,7 @@ pub struct Scene {
     pub shapes: Vec<Shape>,
     pub media: Vec<Medium>,
     pub emitters: Vec<Emitter>,
+    pub(crate) emitter_tables: EmitterTables,
     accel: Accel,
 }
 
@@ -75,7 +77,9 @@ impl Scene {
         emitters: Vec<Emitter>,
     ) -> Self {
         let accel = Accel::build(&shapes);
+        let emitter_tables = EmitterTables::new(&emitters, &shapes);
         Scene {
+            emitter_tables,
             path,
             camera,
             spp,

@@ -1,11 +1,14 @@
 //! Shapes: triangle meshes (`obj`, `ply`, `rectangle`, `cube`) and the analytic `sphere` and
 //! `disk`, each with its BSDF, optional interior/exterior media and optional area emitter.
 
+pub mod analytic;
 mod mesh;
 mod primitives;
+mod sample;
 
 pub use mesh::TriangleMesh;
 pub use primitives::{cube_mesh, rectangle_mesh};
+pub use sample::{AreaSampler, SurfaceSample};
 
 use crate::bsdf::Bsdf;
 use crate::medium::MediumId;

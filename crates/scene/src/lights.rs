@@ -1,0 +1,162 @@
+//! Sampling emitters from a reference point (next-event estimation) and evaluating the pdf of
+//! hitting them by chance, for multiple importance sampling.
+//!
+//! Emitters are chosen uniformly (probability `1/N`), as Mitsuba 3 does by default; the pdfs
+//! returned here include that selection probability. Solid-angle pdfs are per steradian at the
+//! reference point.
+
+use crate::emitter::Emitter;
+use crate::scene::Scene;
+use crate::shape::{AreaSampler, Shape};
+use glam::{Vec2, Vec3};
+use haze_core::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
+use haze_core::Rgb;
+
+/// A sampled direction towards an emitter.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterSample {
+    /// Unit direction from the reference point towards the emitter.
+    pub wi: Vec3,
+    /// Distance to the sampled point (infinite for `constant`).
+    pub dist: f32,
+    /// Radiance arriving from the emitter along `-wi` before attenuation by media; for point and
+    /// spot lights the intensity times `1/dist^2`.
+    pub radiance: Rgb,
+    /// Solid-angle pdf including the selection probability; for delta lights, the selection
+    /// probability alone.
+    pub pdf: f32,
+    pub is_delta: bool,
+    pub emitter: u32,
+}
+
+/// Per-emitter data needed to sample it (area tables of area lights).
+#[derive(Clone, Debug, Default)]
+pub struct EmitterTables {
+    pub area: Vec<Option<AreaSampler>>,
+}
+
+impl EmitterTables {
+    pub fn new(emitters: &[Emitter], shapes: &[Shape]) -> Self {
+        let area = emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area { shape, .. } => Some(AreaSampler::new(&shapes[*shape as usize])),
+                _ => None,
+            })
+            .collect();
+        EmitterTables { area }
+    }
+}
+
+impl Scene {
+    /// Samples a direction from `p` towards a uniformly chosen emitter. `None` if the sample
+    /// carries no energy (back side of an area light, outside a spot's cone).
+    pub fn sample_emitter_direction(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<EmitterSample> {
+        let n = self.emitters.len();
+        if n == 0 {
+            return None;
+        }
+        let idx = ((u_select * n as f32) as usize).min(n - 1);
+        let sel = 1.0 / n as f32;
+        match &self.emitters[idx] {
+            Emitter::Point { position, intensity } => {
+                let v = *position - p;
+                let d2 = v.length_squared();
+                let dist = d2.sqrt();
+                Some(EmitterSample {
+                    wi: v / dist,
+                    dist,
+                    radiance: *intensity / d2,
+                    pdf: sel,
+                    is_delta: true,
+                    emitter: idx as u32,
+                })
+            }
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => {
+                let pos = to_world.transform_point3(Vec3::ZERO);
+                let v = pos - p;
+                let d2 = v.length_squared();
+                let dist = d2.sqrt();
+                let wi = v / dist;
+                let local = to_world.inverse().transform_vector3(-wi).normalize();
+                let f = Emitter::spot_falloff(*cutoff_angle, *beam_width, local);
+                (f > 0.0).then(|| EmitterSample {
+                    wi,
+                    dist,
+                    radiance: *intensity * (f / d2),
+                    pdf: sel,
+                    is_delta: true,
+                    emitter: idx as u32,
+                })
+            }
+            Emitter::Area { shape, radiance } => {
+                let sh = &self.shapes[*shape as usize];
+                let table = self.emitter_tables.area[idx].as_ref()?;
+                let s = table.sample(sh, u);
+                let v = s.p - p;
+                let d2 = v.length_squared();
+                let dist = d2.sqrt();
+                let wi = v / dist;
+                let cos_l = -wi.dot(s.n);
+                if cos_l <= 0.0 || d2 == 0.0 {
+                    return None;
+                }
+                Some(EmitterSample {
+                    wi,
+                    dist,
+                    radiance: *radiance,
+                    pdf: sel * s.pdf * d2 / cos_l,
+                    is_delta: false,
+                    emitter: idx as u32,
+                })
+            }
+            Emitter::Constant { radiance } => Some(EmitterSample {
+                wi: sample_uniform_sphere(u),
+                dist: f32::INFINITY,
+                radiance: *radiance,
+                pdf: sel * uniform_sphere_pdf(),
+                is_delta: false,
+                emitter: idx as u32,
+            }),
+        }
+    }
+
+    /// Pdf (per steradian at `p_ref`, selection included) that [`Self::sample_emitter_direction`]
+    /// picks the point `p_light` with normal `n_light` on the area emitter `emitter`.
+    pub fn area_emitter_pdf(&self, emitter: u32, p_ref: Vec3, p_light: Vec3, n_light: Vec3) -> f32 {
+        let Some(table) = self.emitter_tables.area[emitter as usize].as_ref() else { return 0.0 };
+        let v = p_light - p_ref;
+        let d2 = v.length_squared();
+        let cos_l = (-v.normalize().dot(n_light)).abs();
+        if cos_l == 0.0 {
+            return 0.0;
+        }
+        d2 / (cos_l * table.area * self.emitters.len() as f32)
+    }
+
+    /// Pdf (per steradian) that a `constant` emitter sample picks any given direction.
+    pub fn environment_pdf(&self) -> f32 {
+        uniform_sphere_pdf() / self.emitters.len().max(1) as f32
+    }
+
+    /// Radiance from `constant` emitters along an escaping ray (sum of all of them).
+    pub fn environment_radiance(&self) -> Rgb {
+        self.emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Constant { radiance } => *radiance,
+                _ => Rgb::ZERO,
+            })
+            .sum()
+    }
+
+    /// Radiance leaving an area-emitting shape at a point with normal `n` in direction `w`
+    /// (unit, pointing away from the surface). Zero on the back side.
+    pub fn area_radiance(&self, shape: u32, n: Vec3, w: Vec3) -> Option<(u32, Rgb)> {
+        let e = self.shapes[shape as usize].emitter?;
+        match &self.emitters[e as usize] {
+            Emitter::Area { radiance, .. } if n.dot(w) > 0.0 => Some((e, *radiance)),
+            _ => None,
+        }
+    }
+}
