@@ -83,11 +83,7 @@ mod tests {
             let phase = Phase::HenyeyGreenstein { g };
             let d_in = Vec3::new(0.3, -0.5, 0.81).normalize();
             let mut s = Sampler::from_seed(11);
-            let r = chi2_sphere(
-                || phase.sample(d_in, s.next_2d()).0,
-                |d| phase.eval(d_in, d),
-                300_000,
-            );
+            let r = chi2_sphere(|| phase.sample(d_in, s.next_2d()).0, |d| phase.eval(d_in, d), 300_000);
             assert!(r.passed(0.01), "g = {g}: {r}");
         }
     }
@@ -99,11 +95,7 @@ mod tests {
         let mut s = Sampler::from_seed(12);
         let samp = Phase::HenyeyGreenstein { g: 0.5 };
         let wrong = Phase::HenyeyGreenstein { g: -0.5 };
-        let r = chi2_sphere(
-            || samp.sample(d_in, s.next_2d()).0,
-            |d| wrong.eval(d_in, d),
-            50_000,
-        );
+        let r = chi2_sphere(|| samp.sample(d_in, s.next_2d()).0, |d| wrong.eval(d_in, d), 50_000);
         assert!(!r.passed(0.01), "{r}");
     }
 
@@ -113,11 +105,10 @@ mod tests {
             // Integrate over cos_theta with a fine midpoint rule (2 pi from phi).
             let m = 200_000;
             let h = 2.0 / m as f64;
-            let integral: f64 = (0..m)
-                .map(|i| hg((-1.0 + (i as f64 + 0.5) * h) as f32, g) as f64 * h)
-                .sum::<f64>()
-                * 2.0
-                * std::f64::consts::PI;
+            let integral: f64 =
+                (0..m).map(|i| hg((-1.0 + (i as f64 + 0.5) * h) as f32, g) as f64 * h).sum::<f64>()
+                    * 2.0
+                    * std::f64::consts::PI;
             assert!((integral - 1.0).abs() < 2e-3, "g = {g}: {integral}");
             let phase = Phase::HenyeyGreenstein { g };
             let mut s = Sampler::from_seed(3);

@@ -12,11 +12,7 @@ pub struct Ray {
 
 impl Ray {
     pub fn new(o: Vec3, d: Vec3) -> Self {
-        Ray {
-            o,
-            d,
-            t_max: f32::INFINITY,
-        }
+        Ray { o, d, t_max: f32::INFINITY }
     }
     pub fn at(&self, t: f32) -> Vec3 {
         self.o + self.d * t

@@ -25,16 +25,12 @@ impl Sampler {
     pub fn new(seed: u64, key_a: u64, key_b: u64) -> Self {
         let state = mix64(seed ^ mix64(key_a.wrapping_add(0x9e37_79b9_7f4a_7c15)));
         let stream = mix64(key_b ^ mix64(seed.wrapping_add(0x632b_e59b_d9b4_e019)));
-        Sampler {
-            rng: Pcg32::new(state, stream | 1),
-        }
+        Sampler { rng: Pcg32::new(state, stream | 1) }
     }
 
     /// From a single 64-bit seed (tests and tools).
     pub fn from_seed(seed: u64) -> Self {
-        Sampler {
-            rng: Pcg32::seed_from_u64(seed),
-        }
+        Sampler { rng: Pcg32::seed_from_u64(seed) }
     }
 
     /// Uniform in `[0, 1)`, 24 bits of precision so that the result is never 1.

@@ -109,11 +109,7 @@ mod tests {
     #[test]
     fn uniform_sphere_matches_pdf() {
         let mut s = Sampler::from_seed(1);
-        assert_chi2(chi2_sphere(
-            || sample_uniform_sphere(s.next_2d()),
-            |_| uniform_sphere_pdf(),
-            200_000,
-        ));
+        assert_chi2(chi2_sphere(|| sample_uniform_sphere(s.next_2d()), |_| uniform_sphere_pdf(), 200_000));
     }
 
     #[test]
@@ -171,9 +167,7 @@ mod tests {
             assert!((invert_exponential_sample(x, a) - u).abs() < 1e-5);
         }
         let h = 1e-3;
-        let integral: f32 = (0..20_000)
-            .map(|i| exponential_pdf((i as f32 + 0.5) * h, a) * h)
-            .sum();
+        let integral: f32 = (0..20_000).map(|i| exponential_pdf((i as f32 + 0.5) * h, a) * h).sum();
         assert!((integral - 1.0).abs() < 1e-3);
     }
 }

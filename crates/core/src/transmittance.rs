@@ -1,10 +1,14 @@
 //! Transmittance and free-flight sampling in homogeneous media with RGB extinction.
 //!
-//! Chromatic extinction is sampled with the one-sample spectral MIS of Miller, Georgiev and
-//! Jarosz 2019 ("A null-scattering path integral formulation of light transport", Sec. 5.4;
-//! also pbrt-v4 `VolPathIntegrator` and Mitsuba 3 `volpathmis`): pick a channel uniformly, sample
-//! its exponential, and divide by the *mean* of the three channels' pdfs. This is unbiased for
-//! every channel, including channels whose extinction is zero.
+//! Chromatic extinction is sampled with *path-level* spectral MIS (hero wavelength sampling,
+//! Wilkie et al. 2014; for media, Miller, Georgiev and Jarosz 2019, "A null-scattering path
+//! integral formulation of light transport", Sec. 5.4, also used by pbrt-v4 and Mitsuba 3's
+//! `volpathmis`): one channel `h` (the hero) is chosen per path and every free-flight distance
+//! is sampled from its exponential. Alongside the throughput `f/p_h` the integrator keeps the
+//! ratios `r_c = p_c(path)/p_h(path)` of the pdfs the other channels would have had; the
+//! one-sample MIS estimate of the path is `f / mean_c p_c = (f/p_h) / mean(r)`. Because
+//! `r_h = 1`, `mean(r) >= 1/3`, and the channel-`c` throughput and `r_c` share their
+//! transmittance factors, contributions stay bounded however different the channels are.
 
 use crate::spectrum::Rgb;
 
@@ -17,48 +21,50 @@ pub fn transmittance(sigma_t: Rgb, d: f32) -> Rgb {
     sigma_t.exp_neg(d)
 }
 
-/// Outcome of sampling a free-flight distance along a segment of length `t_max`.
+/// Outcome of sampling a free-flight distance along a segment of length `t_max` from the hero
+/// channel's exponential.
 #[derive(Clone, Copy, Debug)]
 pub enum FreeFlight {
-    /// A real interaction at distance `t`. `weight = T_r(t) / p(t)` where
-    /// `p(t) = mean_c sigma_t[c] exp(-sigma_t[c] t)` (per unit length); multiply by `sigma_s`
-    /// to get the scattering throughput.
-    Interaction { t: f32, weight: Rgb },
-    /// No interaction before `t_max`. `weight = T_r(t_max) / P(pass)` with
-    /// `P(pass) = mean_c exp(-sigma_t[c] t_max)`.
-    Pass { weight: Rgb },
+    /// A real interaction at distance `t`: `weight = T_r(t) / p_h(t)` with
+    /// `p_c(t) = sigma_t[c] exp(-sigma_t[c] t)` (per unit length); multiply by `sigma_s` to get
+    /// the scattering throughput. `ratio[c] = p_c(t) / p_h(t)`.
+    Interaction { t: f32, weight: Rgb, ratio: Rgb },
+    /// No interaction before `t_max`: `weight = T_r(t_max) / P_h` with
+    /// `P_c = exp(-sigma_t[c] t_max)`, `ratio[c] = P_c / P_h`.
+    Pass { weight: Rgb, ratio: Rgb },
 }
 
-/// Samples a free-flight distance by spectral MIS. `u_channel` and `u` are independent uniforms.
-pub fn sample_free_flight(sigma_t: Rgb, t_max: f32, u_channel: f32, u: f32) -> FreeFlight {
-    let c = ((u_channel * 3.0) as usize).min(2);
-    let s = sigma_t[c];
-    let t = if s > 0.0 {
-        -(1.0 - u).ln() / s
-    } else {
-        f32::INFINITY
-    };
+/// Picks the hero channel from a uniform number.
+pub fn hero_channel(u: f32) -> usize {
+    ((u * 3.0) as usize).min(2)
+}
+
+/// Samples a free-flight distance from the exponential of channel `hero`.
+pub fn sample_free_flight(sigma_t: Rgb, t_max: f32, hero: usize, u: f32) -> FreeFlight {
+    let s = sigma_t[hero];
+    let t = if s > 0.0 { -(1.0 - u).ln() / s } else { f32::INFINITY };
     if t < t_max {
         let tr = sigma_t.exp_neg(t);
-        let pdf = (sigma_t * tr).mean();
-        FreeFlight::Interaction {
-            t,
-            weight: tr / pdf,
-        }
+        let pdf = sigma_t * tr;
+        let ph = pdf[hero];
+        FreeFlight::Interaction { t, weight: tr / ph, ratio: pdf / ph }
     } else {
         let tr = transmittance(sigma_t, t_max);
-        let p = tr.mean();
-        if p > 0.0 {
-            FreeFlight::Pass { weight: tr / p }
+        let ph = tr[hero];
+        if ph > 0.0 {
+            FreeFlight::Pass { weight: tr / ph, ratio: tr / ph }
         } else {
-            FreeFlight::Pass { weight: Rgb::ZERO }
+            // Unreachable in exact arithmetic (the hero's pass probability is the probability
+            // of getting here); f32 underflow of exp(-s t) for huge t can still produce it.
+            FreeFlight::Pass { weight: Rgb::ZERO, ratio: Rgb::ONE }
         }
     }
 }
 
-/// Density (per unit length) of an interaction at `t` under [`sample_free_flight`].
-pub fn free_flight_pdf(sigma_t: Rgb, t: f32) -> f32 {
-    (sigma_t * sigma_t.exp_neg(t)).mean()
+/// Density (per unit length) of an interaction at `t` in channel `c`'s sampling,
+/// `sigma_t[c] exp(-sigma_t[c] t)`.
+pub fn free_flight_pdf(sigma_t: Rgb, t: f32) -> Rgb {
+    sigma_t * sigma_t.exp_neg(t)
 }
 
 #[cfg(test)]
@@ -66,9 +72,9 @@ mod tests {
     use super::*;
     use crate::rng::Sampler;
 
-    /// The expected weight of a pass plus interactions integrated along a slab reproduces
-    /// Beer-Lambert transmittance and its complement: E[pass weight] = T_r(L), and
-    /// E[interaction weight * sigma_t] = 1 - T_r(L), channel by channel.
+    /// One segment with a random hero: the MIS estimates `weight / mean(ratio)` of passing and
+    /// of interacting (times `sigma_t`) reproduce Beer-Lambert transmittance `T_r(L)` and its
+    /// complement `1 - T_r(L)` channel by channel, including a channel with zero extinction.
     #[test]
     fn free_flight_estimates_slab_transmittance() {
         let sigma_t = Rgb::new(0.5, 2.0, 0.0);
@@ -77,21 +83,17 @@ mod tests {
         let n = 400_000;
         let (mut pass, mut absorbed) = (Rgb::ZERO, Rgb::ZERO);
         for _ in 0..n {
-            match sample_free_flight(sigma_t, l, s.next_1d(), s.next_1d()) {
-                FreeFlight::Pass { weight } => pass += weight,
-                FreeFlight::Interaction { weight, .. } => absorbed += weight * sigma_t,
+            let hero = hero_channel(s.next_1d());
+            match sample_free_flight(sigma_t, l, hero, s.next_1d()) {
+                FreeFlight::Pass { weight, ratio } => pass += weight / ratio.mean(),
+                FreeFlight::Interaction { weight, ratio, .. } => absorbed += weight * sigma_t / ratio.mean(),
             }
         }
         let pass = pass / n as f32;
         let absorbed = absorbed / n as f32;
         let exact = transmittance(sigma_t, l);
         for c in 0..3 {
-            assert!(
-                (pass[c] - exact[c]).abs() < 5e-3,
-                "channel {c}: {} vs {}",
-                pass[c],
-                exact[c]
-            );
+            assert!((pass[c] - exact[c]).abs() < 5e-3, "channel {c}: {} vs {}", pass[c], exact[c]);
             assert!((absorbed[c] - (1.0 - exact[c])).abs() < 5e-3, "channel {c}");
         }
     }
@@ -102,13 +104,30 @@ mod tests {
         let l = 2.0;
         let m = 20_000;
         let h = l / m as f32;
-        let integral: f32 = (0..m)
-            .map(|i| free_flight_pdf(sigma_t, (i as f32 + 0.5) * h) * h)
-            .sum();
-        let expected = 1.0 - transmittance(sigma_t, l).mean();
-        assert!(
-            (integral - expected).abs() < 1e-4,
-            "{integral} vs {expected}"
+        let integral: Rgb = (0..m).map(|i| free_flight_pdf(sigma_t, (i as f32 + 0.5) * h) * h).sum();
+        let expected = Rgb::ONE - transmittance(sigma_t, l);
+        for c in 0..3 {
+            assert!((integral[c] - expected[c]).abs() < 1e-4, "{integral} vs {expected}");
+        }
+    }
+
+    /// Sampled distances follow the hero channel's exponential (chi-square).
+    #[test]
+    fn free_flight_distances_follow_the_hero_exponential() {
+        let sigma_t = Rgb::new(0.5, 2.0, 1.0);
+        let mut s = Sampler::from_seed(8);
+        let r = haze_testkit::chi2::chi2_interval(
+            || match sample_free_flight(sigma_t, 3.0, 1, s.next_1d()) {
+                FreeFlight::Interaction { t, .. } => t as f64,
+                FreeFlight::Pass { .. } => 3.0,
+            },
+            |t| if t < 3.0 { 2.0 * (-2.0 * t).exp() } else { 0.0 },
+            0.0,
+            2.999,
+            60,
+            100_000,
         );
+        // Passes land at exactly 3.0 and count as outside [0, 2.999]: expected fraction exp(-6).
+        assert!(r.p_value >= 0.01 && r.outside_support < 400, "{r}");
     }
 }

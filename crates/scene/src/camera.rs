@@ -36,11 +36,7 @@ impl Camera {
         // Near/far clips are distances along the camera's z axis.
         let t_near = self.near_clip / d_local.z;
         let t_far = self.far_clip / d_local.z;
-        Ray {
-            o: o + d * t_near,
-            d,
-            t_max: t_far - t_near,
-        }
+        Ray { o: o + d * t_near, d, t_max: t_far - t_near }
     }
 
     pub fn position(&self) -> Vec3 {

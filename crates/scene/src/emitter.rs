@@ -10,12 +10,7 @@ pub enum Emitter {
     /// Spot light at the origin of `to_world` shining down its local `+z`. Mitsuba 3's falloff:
     /// full intensity inside `beam_width`, linear in angle down to zero at `cutoff_angle`
     /// (angles in radians, half-angles from the axis).
-    Spot {
-        to_world: Mat4,
-        intensity: Rgb,
-        cutoff_angle: f32,
-        beam_width: f32,
-    },
+    Spot { to_world: Mat4, intensity: Rgb, cutoff_angle: f32, beam_width: f32 },
     /// Diffuse area light on shape `shape`, emitting `radiance` on the side its normal points to.
     Area { shape: u32, radiance: Rgb },
     /// Uniform environment radiance from every direction at infinity.
@@ -32,7 +27,6 @@ impl Emitter {
         if cos_t >= beam_width.cos() {
             return 1.0;
         }
-        ((cutoff_angle - cos_t.clamp(-1.0, 1.0).acos()) / (cutoff_angle - beam_width))
-            .clamp(0.0, 1.0)
+        ((cutoff_angle - cos_t.clamp(-1.0, 1.0).acos()) / (cutoff_angle - beam_width)).clamp(0.0, 1.0)
     }
 }

@@ -27,12 +27,7 @@ pub struct IntegratorSpec {
 
 impl Default for IntegratorSpec {
     fn default() -> Self {
-        IntegratorSpec {
-            name: "volpath".into(),
-            max_depth: -1,
-            rr_depth: 5,
-            hide_emitters: false,
-        }
+        IntegratorSpec { name: "volpath".into(), max_depth: -1, rr_depth: 5, hide_emitters: false }
     }
 }
 
@@ -78,17 +73,7 @@ impl Scene {
     ) -> Self {
         let accel = Accel::build(&shapes);
         let emitter_tables = EmitterTables::new(&emitters, &shapes);
-        Scene {
-            emitter_tables,
-            path,
-            camera,
-            spp,
-            integrator,
-            shapes,
-            media,
-            emitters,
-            accel,
-        }
+        Scene { emitter_tables, path, camera, spp, integrator, shapes, media, emitters, accel }
     }
 
     /// Closest hit with `t` in `(0, ray.t_max)`.
@@ -98,7 +83,7 @@ impl Scene {
 
     /// True if anything blocks `ray` before `ray.t_max`.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.accel.occluded(&self.shapes, ray)
+        self.accel.occluded(ray)
     }
 
     pub fn medium(&self, id: MediumId) -> &Medium {

@@ -68,22 +68,13 @@ pub fn chi2_test(observed: &[f64], expected: &[f64]) -> Chi2Result {
     }
     let dof = bins.saturating_sub(1).max(1);
     let p_value = 1.0 - ChiSquared::new(dof as f64).unwrap().cdf(stat);
-    Chi2Result {
-        statistic: stat,
-        dof,
-        p_value,
-        outside_support: outside,
-    }
+    Chi2Result { statistic: stat, dof, p_value, outside_support: outside }
 }
 
 /// Chi-square test of a direction sampler against its pdf (per steradian). The sphere is cut
 /// into `N_COS x N_PHI` bins of equal solid angle in `(cos theta, phi)`; expected counts come
 /// from integrating `pdf` over each bin with a 4x4 midpoint rule per sub-cell (8x8 sub-cells).
-pub fn chi2_sphere(
-    mut sample: impl FnMut() -> Vec3,
-    pdf: impl Fn(Vec3) -> f32,
-    n: usize,
-) -> Chi2Result {
+pub fn chi2_sphere(mut sample: impl FnMut() -> Vec3, pdf: impl Fn(Vec3) -> f32, n: usize) -> Chi2Result {
     const N_COS: usize = 40;
     const N_PHI: usize = 80;
     let mut observed = vec![0.0f64; N_COS * N_PHI];
@@ -154,9 +145,7 @@ pub fn chi2_interval(
     let sub = 16;
     let expected: Vec<f64> = (0..bins)
         .map(|i| {
-            (0..sub)
-                .map(|j| pdf(a + w * (i as f64 + (j as f64 + 0.5) / sub as f64)))
-                .sum::<f64>()
+            (0..sub).map(|j| pdf(a + w * (i as f64 + (j as f64 + 0.5) / sub as f64))).sum::<f64>()
                 / sub as f64
                 * w
                 * n as f64
@@ -175,9 +164,7 @@ mod tests {
     fn interval_test_accepts_right_and_rejects_wrong_density() {
         let mut state = 12345u64;
         let mut uni = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         // x = sqrt(u) has density 2x on [0, 1].

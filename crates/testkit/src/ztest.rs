@@ -56,13 +56,7 @@ impl fmt::Display for ZTestReport {
 /// Per-pixel z-test. All slices hold the same number of values (pixels x channels).
 /// `var_mean[i]` is the variance of `mean[i]` as an estimator; `var_ref[i]` the reference's.
 /// A channel-pixel where both variances are zero passes only if the values agree to 1e-6.
-pub fn z_test(
-    mean: &[f32],
-    var_mean: &[f32],
-    reference: &[f32],
-    var_ref: &[f32],
-    alpha: f64,
-) -> ZTestReport {
+pub fn z_test(mean: &[f32], var_mean: &[f32], reference: &[f32], var_ref: &[f32], alpha: f64) -> ZTestReport {
     let n = mean.len();
     assert!(var_mean.len() == n && reference.len() == n && var_ref.len() == n);
     let alpha_1 = 1.0 - (1.0 - alpha).powf(1.0 / n as f64);
@@ -85,11 +79,7 @@ pub fn z_test(
         failed += bad as usize;
     }
     // The pixel means are independent, so Var(sum) = sum of variances.
-    let mean_z = if var_sum > 0.0 {
-        (sum - sum_ref) / var_sum.sqrt()
-    } else {
-        0.0
-    };
+    let mean_z = if var_sum > 0.0 { (sum - sum_ref) / var_sum.sqrt() } else { 0.0 };
     ZTestReport {
         tested: n,
         failed,
@@ -134,6 +124,31 @@ pub fn reference_noise_from_roughness(
     out
 }
 
+/// Guards a per-pixel variance estimate against pixels whose few samples all missed the
+/// rare, bright part of their integrand (then the sample variance is zero or far too small,
+/// and any difference looks infinitely significant). Each channel-pixel's variance becomes the
+/// larger of its own and the mean over its 3x3 neighbourhood: the variance field of a render is
+/// spatially smooth except at edges, where the neighbourhood is the better estimate.
+pub fn pool_variance(var: &[f32], width: usize, height: usize, channels: usize) -> Vec<f32> {
+    let idx = |x: usize, y: usize, c: usize| (y * width + x) * channels + c;
+    let mut out = vec![0.0f32; var.len()];
+    for y in 0..height {
+        for x in 0..width {
+            for c in 0..channels {
+                let (mut acc, mut k) = (0.0f32, 0);
+                for ny in y.saturating_sub(1)..(y + 2).min(height) {
+                    for nx in x.saturating_sub(1)..(x + 2).min(width) {
+                        acc += var[idx(nx, ny, c)];
+                        k += 1;
+                    }
+                }
+                out[idx(x, y, c)] = var[idx(x, y, c)].max(acc / k as f32);
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -145,9 +160,7 @@ mod tests {
         let mut gauss = move || {
             // Box-Muller from a small LCG.
             let mut u = || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
                 ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
             };
             let (a, b) = (u(), u());

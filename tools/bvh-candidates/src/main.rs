@@ -1,6 +1,6 @@
 //! bvh-candidates: measure BVH / ray-triangle crates for haze on a procedural ~1M-triangle mesh.
 //!
-//! cargo run --release -- [--tris N] [--rays N] [--brute N]
+//! cargo run --release -- [--tris N] [--rays N] [--brute N] [--reps N]
 //!
 //! Candidates:
 //!   * obvhs 0.4 CwBvh (compressed wide BVH8, PLOC build, `medium_build` preset)
@@ -13,6 +13,8 @@
 //!
 //! Correctness: every candidate's closest-hit t is compared with obvhs-CwBvh on all rays and
 //! with a brute-force f64 reference on a subset of rays (relative tolerance 1e-4).
+
+mod haze_api;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
@@ -92,7 +94,7 @@ type Tri = [Vec3; 3];
 
 /// ~97% of `n`: a finely tessellated, noise-displaced UV sphere (closed surface);
 /// the rest: small randomly oriented triangles scattered in and around the sphere.
-fn gen_mesh(n: usize, seed: u64) -> Vec<Tri> {
+fn gen_mesh(n: usize, seed: u64) -> (Vec<Tri>, usize) {
     let mut tris = Vec::with_capacity(n);
     // sphere tri count = 2 * nlon * (nlat - 1) with nlon = 2 * nlat  => ~4 nlat^2
     let nlat = (((n as f64) * 0.97 / 4.0).sqrt() as usize).max(3);
@@ -121,6 +123,7 @@ fn gen_mesh(n: usize, seed: u64) -> Vec<Tri> {
             }
         }
     }
+    let n_sphere = tris.len().min(n);
     let mut rng = Rng(seed);
     while tris.len() < n {
         let c = Vec3::new(rng.range(-1.3, 1.3), rng.range(-1.3, 1.3), rng.range(-1.3, 1.3));
@@ -128,7 +131,7 @@ fn gen_mesh(n: usize, seed: u64) -> Vec<Tri> {
         tris.push([c + rng.unit_vec() * s, c + rng.unit_vec() * s, c + rng.unit_vec() * s]);
     }
     tris.truncate(n);
-    tris
+    (tris, n_sphere)
 }
 
 fn bounds(tris: &[Tri]) -> (Vec3, Vec3) {
@@ -210,12 +213,66 @@ fn mt(t: &Tri, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> f32 {
     if tt >= tmin && tt <= tmax { tt } else { f32::INFINITY }
 }
 
+/// Per-ray precomputation for the watertight ray/triangle test of
+/// Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2013.
+#[derive(Clone, Copy)]
+pub struct WtRay {
+    o: Vec3,
+    k: [usize; 3],
+    s: Vec3,
+}
+impl WtRay {
+    #[inline(always)]
+    pub fn new(o: Vec3, d: Vec3) -> Self {
+        let a = d.abs();
+        let kz = if a.x > a.y { if a.x > a.z { 0 } else { 2 } } else if a.y > a.z { 1 } else { 2 };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Self { o, k: [kx, ky, kz], s: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]) }
+    }
+    /// Returns t (INFINITY on miss) and the barycentric weights of (v1, v2).
+    #[inline(always)]
+    pub fn intersect(&self, v0: Vec3, v1: Vec3, v2: Vec3, tmin: f32, tmax: f32) -> (f32, f32, f32) {
+        let [kx, ky, kz] = self.k;
+        let (a, b, c) = (v0 - self.o, v1 - self.o, v2 - self.o);
+        let (ax, ay) = (a[kx] - self.s.x * a[kz], a[ky] - self.s.y * a[kz]);
+        let (bx, by) = (b[kx] - self.s.x * b[kz], b[ky] - self.s.y * b[kz]);
+        let (cx, cy) = (c[kx] - self.s.x * c[kz], c[ky] - self.s.y * c[kz]);
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            // exact fallback on edges
+            u = (cx as f64 * by as f64 - cy as f64 * bx as f64) as f32;
+            v = (ax as f64 * cy as f64 - ay as f64 * cx as f64) as f32;
+            w = (bx as f64 * ay as f64 - by as f64 * ax as f64) as f32;
+        }
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return (f32::INFINITY, 0.0, 0.0);
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return (f32::INFINITY, 0.0, 0.0);
+        }
+        let t = (u * self.s.z * a[kz] + v * self.s.z * b[kz] + w * self.s.z * c[kz]) / det;
+        if t >= tmin && t <= tmax { (t, v / det, w / det) } else { (f32::INFINITY, 0.0, 0.0) }
+    }
+}
+
 /// f64 brute-force reference.
 fn brute_f64(tris: &[Tri], r: &R) -> f64 {
+    brute_f64_id(tris, r).0
+}
+/// (t, triangle index or usize::MAX)
+fn brute_f64_id(tris: &[Tri], r: &R) -> (f64, usize) {
+    let mut id = usize::MAX;
     let o = r.o.as_dvec3();
     let d = r.d.as_dvec3();
     let mut best = f64::INFINITY;
-    for t in tris {
+    for (i, t) in tris.iter().enumerate() {
         let (a, b, c) = (t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3());
         let e1 = b - a;
         let e2 = c - a;
@@ -238,9 +295,10 @@ fn brute_f64(tris: &[Tri], r: &R) -> f64 {
         let tt = e2.dot(q) * inv;
         if tt > 0.0 && tt < best {
             best = tt;
+            id = i;
         }
     }
-    best
+    (best, id)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -286,9 +344,11 @@ mod cand_obvhs {
             let tris = reorder(tris, &bvh.primitive_indices);
             Self { bvh, tris }
         }
+        /// bytes held by the CwBvh itself (by Vec capacity)
         pub fn nodes_bytes(&self) -> usize {
-            self.bvh.nodes.len() * std::mem::size_of_val(&self.bvh.nodes[0])
-                + self.bvh.primitive_indices.len() * 4
+            self.bvh.nodes.capacity() * std::mem::size_of_val(&self.bvh.nodes[0])
+                + self.bvh.primitive_indices.capacity() * 4
+                + self.bvh.exact_node_aabbs.as_ref().map_or(0, |v| v.capacity() * 32)
         }
         /// closest hit with barycentrics (what haze would call)
         pub fn closest_bary(&self, r: &R, tmin: f32, tmax: f32) -> Option<(f32, u32, glam::Vec2)> {
@@ -321,6 +381,37 @@ mod cand_obvhs {
         }
     }
 
+    /// Same CwBvh, but the leaf test is the watertight intersector (obvhs lets the caller
+    /// supply the primitive test as a closure).
+    pub struct CwWt<'a>(pub &'a Cw);
+    impl Cand for CwWt<'_> {
+        #[inline]
+        fn closest(&self, r: &R, tmax: f32) -> (f32, u32) {
+            let cw = self.0;
+            let ray = Ray::new(Vec3A::from(r.o), Vec3A::from(r.d), 0.0, tmax);
+            let wr = WtRay::new(r.o, r.d);
+            let mut hit = RayHit::none();
+            if cw.bvh.ray_traverse(ray, &mut hit, |ray, id| {
+                let t = &cw.tris[id];
+                wr.intersect(t.v0.into(), t.v1.into(), t.v2.into(), ray.tmin, ray.tmax).0
+            }) {
+                (hit.t, cw.bvh.primitive_indices[hit.primitive_id as usize])
+            } else {
+                (f32::INFINITY, u32::MAX)
+            }
+        }
+        #[inline]
+        fn occluded(&self, r: &R, tmax: f32) -> bool {
+            let cw = self.0;
+            let ray = Ray::new(Vec3A::from(r.o), Vec3A::from(r.d), 0.0, tmax);
+            let wr = WtRay::new(r.o, r.d);
+            !cw.bvh.ray_traverse_miss(ray, |ray, id| {
+                let t = &cw.tris[id];
+                wr.intersect(t.v0.into(), t.v1.into(), t.v2.into(), ray.tmin, ray.tmax).0
+            })
+        }
+    }
+
     pub struct B2 {
         pub bvh: Bvh2,
         pub tris: Vec<Triangle>,
@@ -333,9 +424,14 @@ mod cand_obvhs {
             let tris = reorder(tris, &bvh.primitive_indices);
             Self { bvh, tris }
         }
+    }
+    impl B2 {
         pub fn nodes_bytes(&self) -> usize {
-            self.bvh.nodes.len() * std::mem::size_of_val(&self.bvh.nodes[0])
-                + self.bvh.primitive_indices.len() * 4
+            self.bvh.nodes.capacity() * std::mem::size_of_val(&self.bvh.nodes[0])
+                + self.bvh.primitive_indices.capacity() * 4
+                + self.bvh.primitive_indices_freelist.capacity() * 4
+                + self.bvh.primitives_to_nodes.capacity() * 4
+                + self.bvh.parents.capacity() * 4
         }
     }
     impl Cand for B2 {
@@ -548,28 +644,47 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
     (v, t.elapsed())
 }
 
-fn closest_all(c: &dyn Cand, rays: &[R], tmax: f32, p: &rayon::ThreadPool) -> (Vec<(f32, u32)>, f64) {
-    p.install(|| {
-        // warm-up
-        let _: Vec<_> = rays[..rays.len().min(20_000)].par_iter().map(|r| c.closest(r, tmax)).collect();
-        let (v, d) = timed(|| {
-            let mut out = Vec::with_capacity(rays.len());
-            rays.par_iter().with_min_len(4096).map(|r| c.closest(r, tmax)).collect_into_vec(&mut out);
-            out
-        });
-        (v, rays.len() as f64 / d.as_secs_f64() / 1e6)
-    })
+static REPS: AtomicUsize = AtomicUsize::new(3);
+/// run `f` REPS times; return the last result and the best (minimum) time
+fn best_of<T>(mut f: impl FnMut() -> T) -> (T, Duration) {
+    let mut best = Duration::MAX;
+    let mut last = None;
+    for _ in 0..REPS.load(Relaxed).max(1) {
+        drop(last.take());
+        let (v, d) = timed(&mut f);
+        best = best.min(d);
+        last = Some(v);
+    }
+    (last.unwrap(), best)
 }
 
-fn occluded_all(c: &dyn Cand, rays: &[R], tmax: f32, p: &rayon::ThreadPool) -> (Vec<bool>, f64) {
+/// Untimed full pass (for correctness data).
+fn closest_all(c: &dyn Cand, rays: &[R], tmax: f32, p: &rayon::ThreadPool) -> Vec<(f32, u32)> {
     p.install(|| {
-        let _: Vec<_> = rays[..rays.len().min(20_000)].par_iter().map(|r| c.occluded(r, tmax)).collect();
-        let (v, d) = timed(|| {
-            let mut out = Vec::with_capacity(rays.len());
-            rays.par_iter().with_min_len(4096).map(|r| c.occluded(r, tmax)).collect_into_vec(&mut out);
-            out
-        });
-        (v, rays.len() as f64 / d.as_secs_f64() / 1e6)
+        let mut out = Vec::with_capacity(rays.len());
+        rays.par_iter().with_min_len(4096).map(|r| c.closest(r, tmax)).collect_into_vec(&mut out);
+        out
+    })
+}
+fn occluded_all(c: &dyn Cand, rays: &[R], tmax: f32, p: &rayon::ThreadPool) -> Vec<bool> {
+    p.install(|| {
+        let mut out = Vec::with_capacity(rays.len());
+        rays.par_iter().with_min_len(4096).map(|r| c.occluded(r, tmax)).collect_into_vec(&mut out);
+        out
+    })
+}
+/// One timed pass; returns Mrays/s.
+fn time_rays(c: &dyn Cand, rays: &[R], tmax: f32, occl: bool, p: &rayon::ThreadPool) -> f64 {
+    p.install(|| {
+        let t = Instant::now();
+        if occl {
+            let n = rays.par_iter().with_min_len(4096).filter(|r| c.occluded(r, tmax)).count();
+            std::hint::black_box(n);
+        } else {
+            let s: f64 = rays.par_iter().with_min_len(4096).map(|r| c.closest(r, tmax).0.min(1e9) as f64).sum();
+            std::hint::black_box(s);
+        }
+        rays.len() as f64 / t.elapsed().as_secs_f64() / 1e6
     })
 }
 
@@ -593,6 +708,9 @@ struct Row {
     mism_rnd: usize,
     mism_occ: usize,
     brute_bad: usize,
+    /// on the rays where any two candidates disagree, wrong vs f64 brute force: (true hit on sphere, other)
+    arb: (usize, usize),
+    struct_mb: f64,
 }
 
 fn main() {
@@ -607,8 +725,9 @@ fn main() {
             "--tris" => { ntris = val(); i += 1; }
             "--rays" => { nrays = val(); i += 1; }
             "--brute" => { nbrute = val(); i += 1; }
+            "--reps" => { REPS.store(val(), Relaxed); i += 1; }
             "-h" | "--help" => {
-                println!("usage: bvh-candidates [--tris N] [--rays N] [--brute N]");
+                println!("usage: bvh-candidates [--tris N] [--rays N] [--brute N] [--reps N]");
                 return;
             }
             a => panic!("unknown arg {a}"),
@@ -620,7 +739,8 @@ fn main() {
     let pn = pool(nthreads);
 
     println!("# bvh-candidates: {ntris} triangles, {nrays} rays per set, {nthreads} threads\n");
-    let (tris, dt) = timed(|| gen_mesh(ntris, 0x4A5E));
+    let ((tris, n_sphere), dt) = timed(|| gen_mesh(ntris, 0x4A5E));
+    println!("mesh: {n_sphere} displaced-sphere triangles (closed surface) + {} scattered small triangles", ntris - n_sphere);
     let (lo, hi) = bounds(&tris);
     println!("mesh generated in {:.2}s, bbox {lo:?}..{hi:?}", dt.as_secs_f64());
     let cam = camera_rays(nrays);
@@ -652,18 +772,15 @@ fn main() {
     };
 
     let mut rows: Vec<Row> = Vec::new();
+    let all_results: std::cell::RefCell<Vec<(Vec<(f32, u32)>, Vec<(f32, u32)>)>> = Default::default();
     let reference: std::cell::RefCell<Option<(Vec<(f32, u32)>, Vec<(f32, u32)>)>> = Default::default();
 
-    let mut measure = |name: &str, c: &dyn Cand, build1, build2, mem_mb, note: String, rows: &mut Vec<Row>| {
-        eprintln!("  measuring {name} ...");
-        let (cc1, c1) = closest_all(c, &cam, inf, &p1);
-        let (_, c2) = closest_all(c, &cam, inf, &pn);
-        let (rc1, r1) = closest_all(c, &rnd, inf, &p1);
-        let (_, r2) = closest_all(c, &rnd, inf, &pn);
-        let (oc, o1) = occluded_all(c, &cam, inf, &p1);
-        let (_, o2) = occluded_all(c, &cam, inf, &pn);
-        let (or, q1) = occluded_all(c, &rnd, occ_tmax_rnd, &p1);
-        let (_, q2) = occluded_all(c, &rnd, occ_tmax_rnd, &pn);
+    let measure = |name: &str, c: &dyn Cand, build1, build2, mem_mb, struct_mb: f64, note: String, rows: &mut Vec<Row>| {
+        eprintln!("  correctness pass: {name} ...");
+        let cc1 = closest_all(c, &cam, inf, &pn);
+        let rc1 = closest_all(c, &rnd, inf, &pn);
+        let oc = occluded_all(c, &cam, inf, &pn);
+        let or = occluded_all(c, &rnd, occ_tmax_rnd, &pn);
         if reference.borrow().is_none() {
             *reference.borrow_mut() = Some((cc1.clone(), rc1.clone()));
         }
@@ -675,6 +792,7 @@ fn main() {
         let mism_occ = oc.iter().zip(&cc1).filter(|(o, h)| **o != h.0.is_finite()).count()
             + or.iter().zip(&rc1).filter(|(o, h)| **o != (h.0 < occ_tmax_rnd)).count();
         let bb = brute_bad(&cc1, &rc1);
+        all_results.borrow_mut().push((cc1.clone(), rc1.clone()));
         let hits_cam = cc1.iter().filter(|h| h.0.is_finite()).count();
         let hits_rnd = rc1.iter().filter(|h| h.0.is_finite()).count();
         eprintln!("    hits: camera {hits_cam}, random {hits_rnd}; occluded random {}", or.iter().filter(|o| **o).count());
@@ -684,24 +802,26 @@ fn main() {
             build2,
             mem_mb,
             note,
-            thr: [[c1, c2], [r1, r2], [o1, o2], [q1, q2]],
+            thr: [[0.0; 2]; 4],
             mism_cam,
             mism_rnd,
             mism_occ,
             brute_bad: bb,
+            arb: (0, 0),
+            struct_mb: struct_mb,
         });
     };
 
     // ---------------- obvhs ----------------
     let otris = cand_obvhs::to_obvhs(&tris);
-    {
+    let (cw, b) = {
         use obvhs::BvhBuildParams as P;
         eprintln!("obvhs CwBvh: building ...");
-        let (_, b1) = timed(|| p1.install(|| cand_obvhs::Cw::build(&otris, P::medium_build())));
+        let (_, b1) = best_of(|| p1.install(|| cand_obvhs::Cw::build(&otris, P::medium_build())));
         let before = live();
-        let (bvh, b2) = timed(|| pn.install(|| cand_obvhs::Cw::build(&otris, P::medium_build())));
+        let (bvh, b2) = best_of(|| pn.install(|| cand_obvhs::Cw::build(&otris, P::medium_build())));
         let mem = live() - before;
-        let (_, f2) = timed(|| pn.install(|| cand_obvhs::Cw::build(&otris, P::fast_build())));
+        let (_, f2) = best_of(|| pn.install(|| cand_obvhs::Cw::build(&otris, P::fast_build())));
         let cw = cand_obvhs::Cw::new(bvh, &otris);
         let note = format!(
             "{} nodes x 80 B; fast_build(): {:.2}s",
@@ -712,6 +832,7 @@ fn main() {
         // barycentric sanity check on a few camera hits: P = w*v0 + u*v1 + v*v2 ?
         let mut max_err = 0f32;
         let mut max_err_raw = 0f32;
+        let mut max_err_fix = 0f32;
         for r in cam.iter().step_by(997).take(500) {
             if let Some((t, prim, b)) = cw.closest_bary(r, 0.0, inf) {
                 let tr = &tris[prim as usize];
@@ -728,10 +849,18 @@ fn main() {
                 let v = r.d.dot(s.cross(e1)) * inv;
                 let q2 = tr[0] * (1.0 - u - v) + tr[1] * u + tr[2] * v;
                 max_err_raw = max_err_raw.max((p - q2).length());
+                // obvhs' convention without the normalize(): e1=v0-v1, e2=v2-v0, ng=e1 x e2
+                let (a0, a1, a2) = (tr[0], tr[1], tr[2]);
+                let (f1, f2) = (a0 - a1, a2 - a0);
+                let ng = f1.cross(f2);
+                let rr = r.d.cross(a0 - r.o);
+                let (bu, bv) = (rr.dot(f2) / ng.dot(r.d), rr.dot(f1) / ng.dot(r.d));
+                let q3 = a0 * (1.0 - bu - bv) + a1 * bu + a2 * bv;
+                max_err_fix = max_err_fix.max((p - q3).length());
             }
         }
         eprintln!(
-            "   barycentric check: obvhs Triangle::compute_barycentric max |P - P(bary)| = {max_err:.3e}; own MT = {max_err_raw:.3e}"
+            "   barycentric check: obvhs Triangle::compute_barycentric max |P - P(bary)| = {max_err:.3e}; own MT = {max_err_raw:.3e}; obvhs formula w/o normalize = {max_err_fix:.3e}"
         );
         measure(
             "obvhs 0.4 CwBvh (medium_build)",
@@ -739,15 +868,25 @@ fn main() {
             Some(b1.as_secs_f64()),
             Some(b2.as_secs_f64()),
             mb(mem),
+            mb(cw.nodes_bytes()),
             note,
             &mut rows,
         );
-        drop(cw);
+        measure(
+            "obvhs 0.4 CwBvh + watertight closure",
+            &cand_obvhs::CwWt(&cw),
+            None,
+            None,
+            0.0,
+            mb(cw.nodes_bytes()),
+            "same CwBvh as above; leaf test = Woop et al. 2013 watertight intersector passed as the closure".into(),
+            &mut rows,
+        );
 
         eprintln!("obvhs Bvh2: building ...");
-        let (_, b1) = timed(|| p1.install(|| cand_obvhs::B2::build(&otris, P::medium_build())));
+        let (_, b1) = best_of(|| p1.install(|| cand_obvhs::B2::build(&otris, P::medium_build())));
         let before = live();
-        let (bvh, b2) = timed(|| pn.install(|| cand_obvhs::B2::build(&otris, P::medium_build())));
+        let (bvh, b2) = best_of(|| pn.install(|| cand_obvhs::B2::build(&otris, P::medium_build())));
         let mem = live() - before;
         let b = cand_obvhs::B2::new(bvh, &otris);
         let note = format!("{} nodes x {} B", b.bvh.nodes.len(), std::mem::size_of_val(&b.bvh.nodes[0]));
@@ -757,19 +896,21 @@ fn main() {
             Some(b1.as_secs_f64()),
             Some(b2.as_secs_f64()),
             mb(mem),
+            mb(b.nodes_bytes()),
             note,
             &mut rows,
         );
-    }
+        (cw, b)
+    };
     drop(otris);
 
     // ---------------- bvh 0.13 ----------------
-    {
+    let mut shapes = cand_bvh::shapes(&tris);
+    let cb = {
         eprintln!("bvh 0.13: building ...");
-        let mut shapes = cand_bvh::shapes(&tris);
-        let (_, b1) = timed(|| p1.install(|| cand_bvh::build(&mut shapes, false)));
+        let (_, b1) = best_of(|| p1.install(|| cand_bvh::build(&mut shapes, false)));
         let before = live();
-        let (bvh, b2) = timed(|| pn.install(|| cand_bvh::build(&mut shapes, true)));
+        let (bvh, b2) = best_of(|| pn.install(|| cand_bvh::build(&mut shapes, true)));
         let mem = live() - before;
         let note = format!(
             "{} nodes x {} B (+{} B/shape for the BHShape node slot+AABB); hand-written traversal",
@@ -777,6 +918,7 @@ fn main() {
             std::mem::size_of_val(&bvh.nodes[0]),
             std::mem::size_of::<cand_bvh::Shape>()
         );
+        let bvh_bytes = bvh.nodes.capacity() * std::mem::size_of_val(&bvh.nodes[0]);
         let cb = cand_bvh::Cb { bvh, shapes: &shapes, tris: &tris };
         // the crate's own iterator API, on a subset (no tmax pruning => slow)
         let nsub = 20_000.min(nrays);
@@ -792,18 +934,19 @@ fn main() {
             crate_iter.0, crate_iter.1
         );
         drop(refb);
-        measure("bvh 0.13 (SAH, own traversal)", &cb, Some(b1.as_secs_f64()), Some(b2.as_secs_f64()), mb(mem), note, &mut rows);
+        measure("bvh 0.13 (SAH, own traversal)", &cb, Some(b1.as_secs_f64()), Some(b2.as_secs_f64()), mb(mem), mb(bvh_bytes), note, &mut rows);
         rows.last_mut().unwrap().note += &format!(
             "; crate traverse_iterator (1T): {:.3}/{:.3} Mrays/s cam/rnd",
             crate_iter.0, crate_iter.1
         );
-    }
+        cb
+    };
 
     // ---------------- parry3d ----------------
-    {
+    let cp = {
         eprintln!("parry3d: building ...");
         let before = live();
-        let (mesh, b1) = timed(|| cand_parry::build(&tris));
+        let (mesh, b1) = best_of(|| cand_parry::build(&tris));
         let mem = live() - before;
         let cp = cand_parry::Cp { mesh };
         measure(
@@ -812,20 +955,99 @@ fn main() {
             Some(b1.as_secs_f64()),
             None,
             mb(mem),
-            "single-threaded build; memory includes its own vertex/index copy".into(),
+            mb(mem),
+            "single-threaded build (no parallel builder for TriMesh); memory = everything TriMesh::new allocated, incl. its own copy of 3 vertices + 1 index triple per triangle".into(),
             &mut rows,
+        );
+        cp
+    };
+
+    // ---------------- timing: interleaved, best of REPS ----------------
+    {
+        let cww = cand_obvhs::CwWt(&cw);
+        let cands: Vec<&dyn Cand> = vec![&cw, &cww, &b, &cb, &cp];
+        assert_eq!(cands.len(), rows.len());
+        let reps = REPS.load(Relaxed).max(1);
+        let workloads: [(&[R], f32, bool); 4] =
+            [(&cam, inf, false), (&rnd, inf, false), (&cam, inf, true), (&rnd, occ_tmax_rnd, true)];
+        let (_, d) = timed(|| {
+            for (w, &(rays, tmax, occl)) in workloads.iter().enumerate() {
+                for (pi, p) in [&p1, &pn].iter().enumerate() {
+                    for _ in 0..reps {
+                        for (ci, c) in cands.iter().enumerate() {
+                            let m = time_rays(*c, rays, tmax, occl, p);
+                            let e = &mut rows[ci].thr[w][pi];
+                            *e = e.max(m);
+                        }
+                    }
+                }
+            }
+        });
+        eprintln!("timing: {reps} interleaved reps done in {:.0}s", d.as_secs_f64());
+    }
+
+    // ---------------- consensus arbitration ----------------
+    // every ray on which any two candidates disagree is judged by f64 brute force
+    let results = all_results.into_inner();
+    let mut disputed: Vec<(bool, usize)> = Vec::new(); // (is_random_set, ray index)
+    for k in 0..nrays {
+        let dc = results.iter().any(|r| t_mismatch(r.0[k].0, results[0].0[k].0));
+        let dr = results.iter().any(|r| t_mismatch(r.1[k].0, results[0].1[k].0));
+        if dc {
+            disputed.push((false, k));
+        }
+        if dr {
+            disputed.push((true, k));
+        }
+    }
+    let cap = 2000;
+    if disputed.len() > cap {
+        eprintln!("note: {} disputed rays, judging the first {cap}", disputed.len());
+        disputed.truncate(cap);
+    }
+    let (truth, d) = timed(|| {
+        pn.install(|| {
+            disputed
+                .par_iter()
+                .map(|&(isr, k)| brute_f64_id(&tris, if isr { &rnd[k] } else { &cam[k] }))
+                .collect::<Vec<(f64, usize)>>()
+        })
+    });
+    eprintln!("judged {} disputed rays by brute force in {:.1}s", disputed.len(), d.as_secs_f64());
+    for (ci, row) in rows.iter_mut().enumerate() {
+        let res = &results[ci];
+        let mut wrong = (0, 0);
+        for (&(isr, k), &(bf, bid)) in disputed.iter().zip(&truth) {
+            let t = if isr { res.1[k].0 } else { res.0[k].0 };
+            if t_mismatch(t, bf as f32) {
+                if bid < n_sphere { wrong.0 += 1 } else { wrong.1 += 1 }
+            }
+        }
+        row.arb = wrong;
+    }
+    let n_disp_closed = truth.iter().filter(|t| t.1 < n_sphere).count();
+    for (j, (&(isr, k), (bf, bid))) in disputed.iter().zip(&truth).enumerate().take(12) {
+        let r = if isr { &rnd[k] } else { &cam[k] };
+        let ts: Vec<String> = results.iter().map(|res| format!("{:.5}", if isr { res.1[k].0 } else { res.0[k].0 })).collect();
+        eprintln!(
+            "  disputed #{j} {} o={:?} d={:?}: brute t={bf:.5} tri {bid} ({}), candidates [{}]",
+            if isr { "random" } else { "camera" },
+            r.o,
+            r.d,
+            if *bid < n_sphere { "sphere" } else { "scatter/miss" },
+            ts.join(", ")
         );
     }
 
     // ---------------- report ----------------
     let f = |x: Option<f64>| x.map(|v| format!("{v:.2}")).unwrap_or_else(|| "n/a".into());
     println!("\n## Build ({ntris} tris)\n");
-    println!("| candidate | build 1 thread (s) | build {nthreads} threads (s) | BVH memory (MB) | notes |");
-    println!("|---|---:|---:|---:|---|");
+    println!("| candidate | build 1 thread (s) | build {nthreads} threads (s) | structure size (MB) | heap still held after build (MB) | notes |");
+    println!("|---|---:|---:|---:|---:|---|");
     for r in &rows {
-        println!("| {} | {} | {} | {:.0} | {} |", r.name, f(r.build1), f(r.build2), r.mem_mb, r.note);
+        println!("| {} | {} | {} | {:.0} | {:.0} | {} |", r.name, f(r.build1), f(r.build2), r.struct_mb, r.mem_mb, r.note);
     }
-    println!("\n## Throughput (Mrays/s, {nrays} rays per set; 1T / {nthreads}T)\n");
+    println!("\n## Throughput (Mrays/s, {nrays} rays per set; 1 thread / {nthreads} threads; best of {} interleaved reps)\n", REPS.load(Relaxed));
     println!("| candidate | closest, camera | closest, random-inside | occlusion, camera (tmax=inf) | occlusion, random (tmax={occ_tmax_rnd:.2}) |");
     println!("|---|---:|---:|---:|---:|");
     for r in &rows {
@@ -834,15 +1056,19 @@ fn main() {
     }
     println!("\n## Correctness\n");
     println!(
-        "t mismatch = hit/miss differs or |dt| > 1e-4 relative. Reference for the full sets = {} ; brute force = f64 Möller–Trumbore over all triangles on {} camera + {} random rays.\n",
+        "t mismatch = hit/miss differs or |dt| > 1e-4 relative. Reference for the full sets = {}. Disputed rays = rays on which any two candidates disagree; each is judged by an f64 Möller–Trumbore brute force over all triangles. Brute-force subset = {} camera + {} random rays spread over the sets.\n",
         rows[0].name,
         sub.len(),
         sub.len()
     );
-    println!("| candidate | closest mismatches camera | closest mismatches random | occlusion vs own closest-hit | brute-force subset mismatches |");
-    println!("|---|---:|---:|---:|---:|");
+    println!(
+        "| candidate | closest mismatches vs ref, camera | closest mismatches vs ref, random | wrong vs f64 brute force: {} disputed rays whose true hit is on the closed sphere (= leaks) | wrong: {} disputed rays whose true hit is a scattered open triangle or a miss (edge grazing) | occlusion vs own closest-hit | mismatches on the brute-force subset |",
+        n_disp_closed,
+        disputed.len() - n_disp_closed
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|");
     for r in &rows {
-        println!("| {} | {} | {} | {} | {} |", r.name, r.mism_cam, r.mism_rnd, r.mism_occ, r.brute_bad);
+        println!("| {} | {} | {} | {} | {} | {} | {} |", r.name, r.mism_cam, r.mism_rnd, r.arb.0, r.arb.1, r.mism_occ, r.brute_bad);
     }
     println!("\npeak heap: {:.0} MB", mb(PEAK.load(Relaxed)));
 }

@@ -69,7 +69,11 @@ mod tests {
 
     #[test]
     fn disk_hit_respects_radius_and_scale() {
-        let m = Mat4::from_scale_rotation_translation(Vec3::splat(2.0), glam::Quat::IDENTITY, Vec3::new(0.0, 0.0, 1.0));
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::splat(2.0),
+            glam::Quat::IDENTITY,
+            Vec3::new(0.0, 0.0, 1.0),
+        );
         let inv = m.inverse();
         let r = Ray::new(Vec3::new(1.5, 0.0, -1.0), Vec3::Z);
         let (t, _) = intersect_disk(&r, &m, &inv).unwrap();

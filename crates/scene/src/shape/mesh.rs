@@ -22,22 +22,12 @@ impl TriangleMesh {
         indices: Vec<[u32; 3]>,
         flip_normals: bool,
     ) -> Self {
-        TriangleMesh {
-            positions,
-            normals,
-            uvs,
-            indices,
-            flip_normals,
-        }
+        TriangleMesh { positions, normals, uvs, indices, flip_normals }
     }
 
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
         let t = self.indices[i];
-        [
-            self.positions[t[0] as usize],
-            self.positions[t[1] as usize],
-            self.positions[t[2] as usize],
-        ]
+        [self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]]
     }
 
     /// Geometric normal `normalize((p1 - p0) x (p2 - p0))`, negated with `flip_normals`.

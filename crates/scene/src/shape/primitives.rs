@@ -11,12 +11,7 @@ pub fn rectangle_mesh(to_world: &Mat4, flip_normals: bool) -> TriangleMesh {
         Vec3::new(1.0, 1.0, 0.0),
         Vec3::new(-1.0, 1.0, 0.0),
     ];
-    let uv = [
-        Vec2::new(0.0, 0.0),
-        Vec2::new(1.0, 0.0),
-        Vec2::new(1.0, 1.0),
-        Vec2::new(0.0, 1.0),
-    ];
+    let uv = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
     TriangleMesh::new(
         p.iter().map(|&v| to_world.transform_point3(v)).collect(),
         None,
@@ -34,20 +29,9 @@ pub fn cube_mesh(to_world: &Mat4, flip_normals: bool) -> TriangleMesh {
     // Each face: normal axis, sign. Vertices ordered counter-clockwise seen from outside.
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
-            let n = Vec3::from(std::array::from_fn::<f32, 3, _>(|i| {
-                if i == axis {
-                    sign
-                } else {
-                    0.0
-                }
-            }));
-            let a = Vec3::from(std::array::from_fn::<f32, 3, _>(|i| {
-                if i == (axis + 1) % 3 {
-                    1.0
-                } else {
-                    0.0
-                }
-            }));
+            let n = Vec3::from(std::array::from_fn::<f32, 3, _>(|i| if i == axis { sign } else { 0.0 }));
+            let a =
+                Vec3::from(std::array::from_fn::<f32, 3, _>(|i| if i == (axis + 1) % 3 { 1.0 } else { 0.0 }));
             let b = n.cross(a);
             let base = positions.len() as u32;
             for (s, t) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
@@ -69,10 +53,9 @@ mod tests {
         let m = cube_mesh(&Mat4::IDENTITY, false);
         let mut area = 0.0;
         for (i, tri) in m.indices.iter().enumerate() {
-            let c = (m.positions[tri[0] as usize]
-                + m.positions[tri[1] as usize]
-                + m.positions[tri[2] as usize])
-                / 3.0;
+            let c =
+                (m.positions[tri[0] as usize] + m.positions[tri[1] as usize] + m.positions[tri[2] as usize])
+                    / 3.0;
             assert!(m.face_normal(i).dot(c) > 0.0, "face {i} points inwards");
             area += m.triangle_area(i);
         }

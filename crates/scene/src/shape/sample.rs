@@ -32,7 +32,9 @@ impl AreaSampler {
                 }
                 AreaSampler { area: acc as f32, cdf }
             }
-            Geometry::Sphere { radius, .. } => AreaSampler { area: 4.0 * haze_core::PI * radius * radius, cdf: vec![] },
+            Geometry::Sphere { radius, .. } => {
+                AreaSampler { area: 4.0 * haze_core::PI * radius * radius, cdf: vec![] }
+            }
             Geometry::Disk { to_world, .. } => {
                 let ex = to_world.transform_vector3(Vec3::X);
                 let ey = to_world.transform_vector3(Vec3::Y);

@@ -1,0 +1,214 @@
+//! `haze render`.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use haze_render::image_io::RgbImage;
+use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
+use haze_render::{Component, VolPath};
+use haze_scene::{LoadOptions, Scene};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (Mitsuba 3 XML).
+    pub scene: PathBuf,
+    /// Output EXR path; a PNG preview is written next to it.
+    #[arg(short, long, default_value = "haze.exr")]
+    pub output: PathBuf,
+    /// Samples per pixel (default: the scene's sampler `sample_count`).
+    #[arg(long, conflicts_with = "time")]
+    pub spp: Option<u32>,
+    /// Render for this many seconds instead of a fixed sample count.
+    #[arg(long)]
+    pub time: Option<f64>,
+    /// Seed of every random choice; the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Integrator, overriding the scene's `<integrator>` (volpath, volpathmis).
+    #[arg(long)]
+    pub integrator: Option<String>,
+    /// Override a scene `<default>` parameter: -D name=value (repeatable).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
+    /// Also write OUT_emitted.exr, OUT_single.exr, OUT_multiple.exr, OUT_surface.exr (they sum to OUT.exr).
+    #[arg(long)]
+    pub components: bool,
+    /// Write the per-pixel variance of one sample to this EXR.
+    #[arg(long)]
+    pub variance_out: Option<PathBuf>,
+    /// Samples per pixel in each progressive pass.
+    #[arg(long, default_value_t = 1)]
+    pub spp_per_pass: u32,
+    /// Exposure of the PNG preview in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// No progress bar.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn parse_defines(define: &[String]) -> Result<Vec<(String, String)>> {
+    define
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+            _ => bail!("-D expects NAME=VALUE, got '{d}'"),
+        })
+        .collect()
+}
+
+pub fn load_scene(path: &Path, define: &[String]) -> Result<Scene> {
+    let options = LoadOptions { defines: parse_defines(define)? };
+    Ok(haze_scene::load_file(path, &options)?)
+}
+
+pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(t) = threads {
+        if t == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
+    Ok(())
+}
+
+/// Ctrl-C once: finish the current pass and write the image; twice: exit at once.
+fn install_interrupt_handler() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    let _ = ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            eprintln!("\ninterrupted twice: exiting without writing");
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupt: finishing the current pass, then writing the image (Ctrl-C again to abort)");
+    });
+    flag
+}
+
+fn component_path(out: &Path, comp: Component) -> PathBuf {
+    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
+    out.with_file_name(format!("{stem}_{}.exr", comp.name()))
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    set_threads(args.threads)?;
+    if let Some(t) = args.time {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--time must be a positive number of seconds, got {t}");
+        }
+    }
+    if args.spp == Some(0) {
+        bail!("--spp must be at least 1");
+    }
+    if args.spp_per_pass == 0 {
+        bail!("--spp-per-pass must be at least 1");
+    }
+    let scene = load_scene(&args.scene, &args.define)?;
+    let name = args.integrator.clone().unwrap_or_else(|| scene.integrator.name.clone());
+    let settings = RenderSettings {
+        spp: if args.time.is_some() { 0 } else { args.spp.unwrap_or(scene.spp) },
+        time_limit: args.time.map(Duration::from_secs_f64),
+        seed: args.seed,
+        spp_per_pass: args.spp_per_pass,
+        components: args.components,
+    };
+    let cancel = install_interrupt_handler();
+    let cam = &scene.camera;
+    let pixels = cam.width as u64 * cam.height as u64;
+    let bar = progress_bar(&settings, args.quiet);
+    let on_pass = |r: &PassReport| {
+        let rate = (r.spp_done * pixels) as f64 / r.elapsed.as_secs_f64().max(1e-9);
+        bar.set_message(format!("{} spp, {:.2} Msamples/s", r.spp_done, rate * 1e-6));
+        match settings.time_limit {
+            Some(_) => bar.set_position(r.elapsed.as_millis() as u64),
+            None => bar.set_position(r.spp_done),
+        }
+    };
+    let output = match name.as_str() {
+        "volpath" | "volpathmis" => {
+            render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass)
+        }
+        "path" if scene.media.is_empty() => {
+            render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass)
+        }
+        "path" => bail!(
+            "integrator 'path' ignores participating media in Mitsuba 3; this scene has media: use volpath"
+        ),
+        "vrl" | "vpl" | "vrl_lightcuts" | "vpl_lightcuts" => {
+            bail!("integrator '{name}' is not implemented yet (virtual lights land in a later release); use volpath")
+        }
+        other => bail!("unknown integrator '{other}' (available: volpath, volpathmis)"),
+    };
+    bar.finish_and_clear();
+    report_and_write(&args, &scene, &name, &output)
+}
+
+fn progress_bar(settings: &RenderSettings, quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let (len, unit) = match settings.time_limit {
+        Some(t) => (t.as_millis() as u64, "ms"),
+        None => (settings.spp as u64, "spp"),
+    };
+    let bar = ProgressBar::new(len);
+    let template =
+        format!("{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {unit} ETA {{eta}} {{msg}}");
+    bar.set_style(ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar()));
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
+fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOutput) -> Result<()> {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    if out.film.samples == 0 {
+        bail!("no samples were rendered (interrupted before the first pass ended); nothing written");
+    }
+    let secs = out.elapsed.as_secs_f64();
+    let samples = out.film.samples * (w * h) as u64;
+    eprintln!(
+        "{name}: {}x{} at {} spp in {:.2} s ({} passes, {:.2} Msamples/s){}",
+        w,
+        h,
+        out.film.samples,
+        secs,
+        out.passes,
+        samples as f64 / secs.max(1e-9) * 1e-6,
+        if out.interrupted { ", interrupted" } else { "" }
+    );
+    if out.invalid_samples > 0 {
+        eprintln!("warning: {} samples were NaN or infinite and were discarded", out.invalid_samples);
+    }
+    let write = |path: &Path, data: Vec<f32>| -> Result<()> {
+        RgbImage::new(w, h, data).write_exr(path).with_context(|| format!("writing {}", path.display()))
+    };
+    let full = RgbImage::new(w, h, out.film.mean(None));
+    full.write_exr(&args.output).with_context(|| format!("writing {}", args.output.display()))?;
+    let png = args.output.with_extension("png");
+    full.write_png(&png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
+    eprintln!("wrote {} and {}", args.output.display(), png.display());
+    if args.components {
+        for comp in Component::ALL {
+            let p = component_path(&args.output, comp);
+            write(&p, out.film.mean(Some(comp)))?;
+            eprintln!("wrote {} ({})", p.display(), comp.name());
+        }
+    }
+    if let Some(v) = &args.variance_out {
+        write(v, out.film.sample_variance(None))?;
+        eprintln!("wrote {} (per-pixel variance of one sample)", v.display());
+    }
+    Ok(())
+}

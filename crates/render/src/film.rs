@@ -1,0 +1,109 @@
+//! Film: per-pixel accumulation of sample sums and squared sums, for the mean image and the
+//! variance of that mean (used by the statistical tests and `--variance-out`).
+
+use crate::components::{Component, PathRadiance};
+use haze_core::Rgb;
+
+/// Layers stored per pixel: the full image, then optionally the four components.
+#[derive(Clone, Debug)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    /// 1 (full image only) or 5 (full image + components).
+    layers: usize,
+    /// Per pixel: for each layer, 3 sums then 3 squared sums (f64: millions of samples).
+    data: Vec<f64>,
+    /// Samples accumulated per pixel (the same for every pixel).
+    pub samples: u64,
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32, components: bool) -> Self {
+        let layers = if components { 5 } else { 1 };
+        Film {
+            width,
+            height,
+            layers,
+            data: vec![0.0; width as usize * height as usize * layers * 6],
+            samples: 0,
+        }
+    }
+
+    pub fn has_components(&self) -> bool {
+        self.layers == 5
+    }
+
+    /// Values per pixel in the raw buffer (for splitting it into rows).
+    pub fn stride(&self) -> usize {
+        self.layers * 6
+    }
+
+    /// The raw accumulation buffer, for parallel per-row updates.
+    pub fn data_mut(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+
+    /// Adds one sample to a pixel's slot of the raw buffer.
+    #[inline]
+    pub fn add_sample(slot: &mut [f64], r: &PathRadiance) {
+        let layers = slot.len() / 6;
+        let mut put = |layer: usize, v: Rgb| {
+            let base = layer * 6;
+            for c in 0..3 {
+                let x = v[c] as f64;
+                slot[base + c] += x;
+                slot[base + 3 + c] += x * x;
+            }
+        };
+        put(0, r.total());
+        if layers == 5 {
+            for comp in Component::ALL {
+                put(1 + comp as usize, r.get(comp));
+            }
+        }
+    }
+
+    fn layer_index(&self, comp: Option<Component>) -> usize {
+        match comp {
+            None => 0,
+            Some(c) => {
+                assert!(self.has_components(), "film was created without components");
+                1 + c as usize
+            }
+        }
+    }
+
+    /// Mean image (row-major RGB) of the full image (`None`) or a component.
+    pub fn mean(&self, comp: Option<Component>) -> Vec<f32> {
+        let layer = self.layer_index(comp);
+        let n = self.samples.max(1) as f64;
+        let stride = self.stride();
+        self.data.chunks(stride).flat_map(|px| (0..3).map(move |c| (px[layer * 6 + c] / n) as f32)).collect()
+    }
+
+    /// Variance of the per-pixel mean: the unbiased sample variance of one sample divided by the
+    /// sample count.
+    pub fn variance_of_mean(&self, comp: Option<Component>) -> Vec<f32> {
+        self.sample_variance(comp).into_iter().map(|v| v / self.samples.max(1) as f32).collect()
+    }
+
+    /// Unbiased variance of a single sample, per pixel and channel (Mitsuba's `_var` images).
+    pub fn sample_variance(&self, comp: Option<Component>) -> Vec<f32> {
+        let layer = self.layer_index(comp);
+        let n = self.samples as f64;
+        let stride = self.stride();
+        self.data
+            .chunks(stride)
+            .flat_map(|px| {
+                (0..3).map(move |c| {
+                    if n < 2.0 {
+                        return 0.0;
+                    }
+                    let s = px[layer * 6 + c];
+                    let s2 = px[layer * 6 + 3 + c];
+                    (((s2 - s * s / n) / (n - 1.0)).max(0.0)) as f32
+                })
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,33 @@
+//! Integrators: estimators of the radiance arriving along a camera ray.
+
+mod nee;
+mod volpath;
+
+pub use nee::transmittance_to;
+pub use volpath::VolPath;
+
+use crate::components::PathRadiance;
+use haze_core::{Ray, Sampler};
+use haze_scene::{MediumId, Scene};
+
+/// An estimator of radiance along camera rays, run in progressive passes.
+pub trait Integrator: Sync {
+    /// Data shared by every pixel of one pass (e.g. the virtual lights traced for it). Built from
+    /// the pass's own seed so that passes are independent and reproducible.
+    type PassData: Sync;
+
+    fn name(&self) -> &str;
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> Self::PassData;
+
+    /// One sample of the radiance arriving at the camera along `-ray.d`, split by component.
+    /// `medium` is the medium the ray starts in.
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &Self::PassData,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance;
+}

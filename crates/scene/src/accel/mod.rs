@@ -1,0 +1,300 @@
+//! Ray queries over all shapes: triangles of every mesh in one bounding volume hierarchy
+//! (`obvhs`' compressed wide BVH, chosen by measurement: see `tools/bvh-candidates/README.md`),
+//! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
+//! have few of them).
+
+mod watertight;
+
+pub use watertight::WatertightRay;
+
+use crate::scene::SurfaceInteraction;
+use crate::shape::analytic::{intersect_disk, intersect_sphere};
+use crate::shape::{Geometry, Shape};
+use glam::{Mat4, Vec2, Vec3, Vec3A};
+use haze_core::Ray;
+use obvhs::cwbvh::{builder::build_cwbvh_from_tris, CwBvh};
+use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+
+/// A triangle in BVH leaf order with the shape and primitive it came from.
+#[derive(Clone, Copy, Debug)]
+struct TriRef {
+    v: [Vec3A; 3],
+    shape: u32,
+    prim: u32,
+}
+
+#[derive(Clone, Debug)]
+enum Analytic {
+    Sphere { shape: u32, center: Vec3, radius: f32, flip: bool },
+    Disk { shape: u32, to_world: Mat4, inv: Mat4, normal: Vec3 },
+}
+
+pub struct Accel {
+    bvh: Option<CwBvh>,
+    tris: Vec<TriRef>,
+    analytic: Vec<Analytic>,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Accel {
+    pub fn build(shapes: &[Shape]) -> Self {
+        let mut flat = Vec::new();
+        let mut refs = Vec::new();
+        let mut analytic = Vec::new();
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (si, s) in shapes.iter().enumerate() {
+            match &s.geometry {
+                Geometry::Mesh(m) => {
+                    for i in 0..m.indices.len() {
+                        let [a, b, c] = m.vertices(i);
+                        for p in [a, b, c] {
+                            lo = lo.min(p);
+                            hi = hi.max(p);
+                        }
+                        flat.push(Triangle { v0: a.into(), v1: b.into(), v2: c.into() });
+                        refs.push(TriRef {
+                            v: [a.into(), b.into(), c.into()],
+                            shape: si as u32,
+                            prim: i as u32,
+                        });
+                    }
+                }
+                Geometry::Sphere { center, radius, flip_normals } => {
+                    lo = lo.min(*center - Vec3::splat(*radius));
+                    hi = hi.max(*center + Vec3::splat(*radius));
+                    analytic.push(Analytic::Sphere {
+                        shape: si as u32,
+                        center: *center,
+                        radius: *radius,
+                        flip: *flip_normals,
+                    });
+                }
+                Geometry::Disk { to_world, flip_normals } => {
+                    let ex = to_world.transform_vector3(Vec3::X);
+                    let ey = to_world.transform_vector3(Vec3::Y);
+                    let o = to_world.transform_point3(Vec3::ZERO);
+                    for p in [o + ex + ey, o - ex - ey, o + ex - ey, o - ex + ey] {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                    let n = ex.cross(ey).normalize();
+                    analytic.push(Analytic::Disk {
+                        shape: si as u32,
+                        to_world: *to_world,
+                        inv: to_world.inverse(),
+                        normal: if *flip_normals { -n } else { n },
+                    });
+                }
+            }
+        }
+        let (bvh, tris) = if flat.is_empty() {
+            (None, Vec::new())
+        } else {
+            let bvh = build_cwbvh_from_tris(&flat, BvhBuildParams::medium_build(), &mut Default::default());
+            let tris = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
+            (Some(bvh), tris)
+        };
+        Accel { bvh, tris, analytic, lo, hi }
+    }
+
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (self.lo, self.hi)
+    }
+
+    pub fn intersect(&self, shapes: &[Shape], ray: &Ray) -> Option<SurfaceInteraction> {
+        let mut t_max = ray.t_max;
+        let mut best: Option<SurfaceInteraction> = None;
+        if let Some(bvh) = &self.bvh {
+            let o: Vec3A = ray.o.into();
+            let d: Vec3A = ray.d.into();
+            let wt = WatertightRay::new(o, d);
+            let r = BvhRay::new(o, d, 0.0, t_max);
+            let mut hit = RayHit::none();
+            let found = bvh.ray_traverse(r, &mut hit, |r, i| {
+                let v = &self.tris[i].v;
+                wt.intersect(v[0], v[1], v[2], 1e-7, r.tmax).map_or(f32::INFINITY, |h| h.0)
+            });
+            if found {
+                let tri = &self.tris[hit.primitive_id as usize];
+                if let Some((t, b1, b2)) = wt.intersect(tri.v[0], tri.v[1], tri.v[2], 0.0, f32::INFINITY) {
+                    t_max = t;
+                    best = Some(self.triangle_interaction(shapes, tri, t, b1, b2));
+                }
+            }
+        }
+        for a in &self.analytic {
+            let r = Ray { t_max, ..*ray };
+            match a {
+                Analytic::Sphere { shape, center, radius, flip } => {
+                    if let Some(t) = intersect_sphere(&r, *center, *radius) {
+                        t_max = t;
+                        let p = ray.at(t);
+                        let n = (p - *center).normalize();
+                        let n = if *flip { -n } else { n };
+                        let phi = n.z.atan2(n.x);
+                        let uv = Vec2::new(
+                            phi * 0.5 * haze_core::INV_PI + 0.5,
+                            n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI,
+                        );
+                        best = Some(SurfaceInteraction { t, p, n, ns: n, uv, shape: *shape, prim: 0 });
+                    }
+                }
+                Analytic::Disk { shape, to_world, inv, normal } => {
+                    if let Some((t, local)) = intersect_disk(&r, to_world, inv) {
+                        t_max = t;
+                        let uv =
+                            Vec2::new(local.length(), local.y.atan2(local.x) * 0.5 * haze_core::INV_PI + 0.5);
+                        best = Some(SurfaceInteraction {
+                            t,
+                            p: ray.at(t),
+                            n: *normal,
+                            ns: *normal,
+                            uv,
+                            shape: *shape,
+                            prim: 0,
+                        });
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    fn triangle_interaction(
+        &self,
+        shapes: &[Shape],
+        tri: &TriRef,
+        t: f32,
+        b1: f32,
+        b2: f32,
+    ) -> SurfaceInteraction {
+        let Geometry::Mesh(m) = &shapes[tri.shape as usize].geometry else {
+            unreachable!("triangles come from meshes")
+        };
+        let b0 = 1.0 - b1 - b2;
+        let [v0, v1, v2] = tri.v.map(Vec3::from);
+        // Barycentric interpolation is more precise than o + t d far from the origin.
+        let p = v0 * b0 + v1 * b1 + v2 * b2;
+        let n = m.face_normal(tri.prim as usize);
+        let idx = m.indices[tri.prim as usize].map(|i| i as usize);
+        let ns = match &m.normals {
+            Some(ns) => {
+                let s = (ns[idx[0]] * b0 + ns[idx[1]] * b1 + ns[idx[2]] * b2).normalize_or_zero();
+                let s = if m.flip_normals { -s } else { s };
+                if s == Vec3::ZERO {
+                    n
+                } else {
+                    s
+                }
+            }
+            None => n,
+        };
+        let uv = match &m.uvs {
+            Some(uv) => uv[idx[0]] * b0 + uv[idx[1]] * b1 + uv[idx[2]] * b2,
+            None => Vec2::new(b1, b2),
+        };
+        SurfaceInteraction { t, p, n, ns, uv, shape: tri.shape, prim: tri.prim }
+    }
+
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if let Some(bvh) = &self.bvh {
+            let o: Vec3A = ray.o.into();
+            let d: Vec3A = ray.d.into();
+            let wt = WatertightRay::new(o, d);
+            let r = BvhRay::new(o, d, 0.0, ray.t_max);
+            let missed = bvh.ray_traverse_miss(r, |r, i| {
+                let v = &self.tris[i].v;
+                wt.intersect(v[0], v[1], v[2], 1e-7, r.tmax).map_or(f32::INFINITY, |h| h.0)
+            });
+            if !missed {
+                return true;
+            }
+        }
+        self.analytic.iter().any(|a| match a {
+            Analytic::Sphere { center, radius, .. } => intersect_sphere(ray, *center, *radius).is_some(),
+            Analytic::Disk { to_world, inv, .. } => intersect_disk(ray, to_world, inv).is_some(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::Bsdf;
+    use crate::shape::{cube_mesh, TriangleMesh};
+    use haze_core::Sampler;
+
+    fn shape(geometry: Geometry) -> Shape {
+        Shape { name: "s".into(), geometry, bsdf: Bsdf::Null, interior: None, exterior: None, emitter: None }
+    }
+
+    /// The BVH agrees with a brute-force loop over all triangles on random rays.
+    #[test]
+    fn bvh_matches_brute_force() {
+        let mut s = Sampler::from_seed(1);
+        let mut tris = Vec::new();
+        for _ in 0..2000 {
+            let c = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+            let e = |s: &mut Sampler| Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5);
+            tris.push([c + e(&mut s), c + e(&mut s), c + e(&mut s)]);
+        }
+        let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+        let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
+        let accel = Accel::build(&shapes);
+        for _ in 0..2000 {
+            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+            let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+            let ray = Ray::new(o, d);
+            let wt = WatertightRay::new(o.into(), d.into());
+            let brute = tris
+                .iter()
+                .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), 1e-7, f32::INFINITY))
+                .map(|h| h.0)
+                .fold(f32::INFINITY, f32::min);
+            let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
+            assert!(got == brute || (got - brute).abs() < 1e-5 * brute, "{got} vs {brute}");
+            assert!(!accel.occluded(&Ray { t_max: brute, ..ray }));
+            if brute.is_finite() {
+                assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
+            }
+        }
+    }
+
+    /// Rays from inside a closed cube always find the boundary (no leaks through edges).
+    #[test]
+    fn closed_cube_is_watertight() {
+        let shapes = vec![shape(Geometry::Mesh(cube_mesh(&Mat4::IDENTITY, false)))];
+        let accel = Accel::build(&shapes);
+        let mut s = Sampler::from_seed(2);
+        for _ in 0..20_000 {
+            let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+            let h = accel.intersect(&shapes, &Ray::new(Vec3::ZERO, d)).expect("ray leaked out of the cube");
+            assert!(h.n.dot(d) > 0.0);
+        }
+    }
+
+    #[test]
+    fn spheres_and_disks_are_found() {
+        let shapes = vec![
+            shape(Geometry::Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, flip_normals: false }),
+            shape(Geometry::Disk {
+                to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, 2.0)),
+                flip_normals: false,
+            }),
+        ];
+        let accel = Accel::build(&shapes);
+        let h = accel.intersect(&shapes, &Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
+        assert_eq!(h.shape, 1);
+        assert!((h.t - 2.0).abs() < 1e-5);
+        // Aimed at the sphere's centre past the disk's rim: the normal faces back along the ray.
+        let d = Vec3::new(-2.0, 0.0, 5.0).normalize();
+        let h = accel.intersect(&shapes, &Ray::new(Vec3::new(2.0, 0.0, 0.0), d)).unwrap();
+        assert_eq!(h.shape, 0);
+        assert!((h.n + d).length() < 1e-3, "{:?}", h.n);
+        assert!((h.t - (Vec3::new(2.0, 0.0, 0.0) - Vec3::new(0.0, 0.0, 5.0)).length() + 1.0).abs() < 1e-4);
+    }
+}

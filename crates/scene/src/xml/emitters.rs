@@ -1,0 +1,84 @@
+//! Emitter plugins `point`, `spot`, `constant`, and `area` (inside a shape).
+
+use super::params::Params;
+use super::LoadError;
+use crate::emitter::Emitter;
+use glam::{Mat4, Vec3};
+use haze_core::Rgb;
+
+/// Builds a `point`, `spot` or `constant` emitter (an `area` emitter is built by its shape
+/// with [`area_radiance`]). Mitsuba 3 defaults:
+/// - `point`: `position` (origin) or the translation of `to_world`; `intensity` 1 (W/sr).
+/// - `spot`: `to_world` (shines down local +z); `intensity` 1; `cutoff_angle` 20 degrees;
+///   `beam_width` 3/4 of the cutoff; both half-angles in degrees, stored in radians.
+/// - `constant`: `radiance` 1.
+///
+/// haze emitters take no medium: a `<medium>` or `<ref>` to one inside an emitter is an
+/// "unsupported" error rather than silently ignored.
+pub(super) fn build(p: &Params) -> Result<Emitter, LoadError> {
+    if let Some(m) = p.objects(&["medium"]).first() {
+        return Err(m.site.error("unsupported: a medium inside <emitter> (haze emitters take no medium)"));
+    }
+    let emitter = match p.ty() {
+        "point" => {
+            let position = match (p.point_opt("position")?, p.transform_opt("to_world")?) {
+                (Some(_), Some(_)) => {
+                    return Err(p.error_at("to_world", "give either 'position' or 'to_world', not both"))
+                }
+                (Some(pos), None) => pos,
+                (None, Some(m)) => m.transform_point3(Vec3::ZERO),
+                (None, None) => Vec3::ZERO,
+            };
+            let intensity = non_negative(p, "intensity")?;
+            Emitter::Point { position, intensity }
+        }
+        "spot" => {
+            let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+            let intensity = non_negative(p, "intensity")?;
+            let cutoff = p.float("cutoff_angle", 20.0)?;
+            if !(cutoff > 0.0 && cutoff < 180.0) {
+                return Err(p.error_at(
+                    "cutoff_angle",
+                    format!("'cutoff_angle' must be in (0, 180) degrees, got {cutoff}"),
+                ));
+            }
+            let beam = p.float("beam_width", cutoff * 0.75)?;
+            if beam < 0.0 || beam > cutoff {
+                return Err(p.error_at(
+                    "beam_width",
+                    format!("'beam_width' ({beam}) must lie in [0, cutoff_angle = {cutoff}] degrees"),
+                ));
+            }
+            Emitter::Spot {
+                to_world,
+                intensity,
+                cutoff_angle: cutoff.to_radians(),
+                beam_width: beam.to_radians(),
+            }
+        }
+        "constant" => Emitter::Constant { radiance: non_negative(p, "radiance")? },
+        // Shapes build area emitters; the builder rejects them elsewhere.
+        _ => return Err(p.element().error("an area emitter must be nested inside the <shape> that emits")),
+    };
+    p.finish()?;
+    Ok(emitter)
+}
+
+/// The `radiance` of an `area` emitter (Mitsuba 3 default 1).
+pub(super) fn area_radiance(p: &Params) -> Result<Rgb, LoadError> {
+    if let Some(m) = p.objects(&["medium"]).first() {
+        return Err(m.site.error("unsupported: a medium inside <emitter> (haze emitters take no medium)"));
+    }
+    let radiance = non_negative(p, "radiance")?;
+    p.finish()?;
+    Ok(radiance)
+}
+
+/// A spectrum parameter defaulting to 1 that must not be negative.
+fn non_negative(p: &Params, name: &str) -> Result<Rgb, LoadError> {
+    let v = p.spectrum(name, Rgb::ONE)?;
+    if v.min_component() < 0.0 {
+        return Err(p.error_at(name, format!("'{name}' must not be negative")));
+    }
+    Ok(v)
+}

@@ -1,0 +1,97 @@
+//! The table of supported Mitsuba 3 plugins and the parameters each one reads.
+//!
+//! The loader's strictness check uses it (a parameter not listed is "unused"; a type not listed
+//! is "unsupported"), and a test checks that `docs/mitsuba-compat.md` mentions every entry.
+
+/// One supported plugin: `(kind, type, parameters)`, e.g. `("shape", "sphere", &["center",
+/// ..])`. `kind` is the XML tag (`shape`, `bsdf`, `medium`, `phase`, `emitter`, `sensor`,
+/// `film`, `rfilter`, `sampler`, `integrator`); the parameters are the names of the typed
+/// parameters (`<float name="..">`, ...) the plugin reads. Nested objects (a shape's `<bsdf>`,
+/// a medium's `<phase>`, ...) are not listed here.
+pub type PluginEntry = (&'static str, &'static str, &'static [&'static str]);
+
+/// Parameters shared by every integrator (see [`crate::IntegratorSpec`]).
+const INTEGRATOR_PARAMS: &[&str] = &["max_depth", "rr_depth", "hide_emitters"];
+const MESH_FILE_PARAMS: &[&str] =
+    &["filename", "to_world", "flip_normals", "face_normals", "flip_tex_coords"];
+const SHAPE_PARAMS: &[&str] = &["to_world", "flip_normals"];
+
+const PLUGINS: &[PluginEntry] = &[
+    ("integrator", "volpath", INTEGRATOR_PARAMS),
+    ("integrator", "volpathmis", INTEGRATOR_PARAMS),
+    ("integrator", "path", INTEGRATOR_PARAMS),
+    ("integrator", "vrl", INTEGRATOR_PARAMS),
+    ("integrator", "vpl", INTEGRATOR_PARAMS),
+    ("integrator", "vrl_lightcuts", INTEGRATOR_PARAMS),
+    ("integrator", "vpl_lightcuts", INTEGRATOR_PARAMS),
+    ("sensor", "perspective", &["fov", "fov_axis", "focal_length", "near_clip", "far_clip", "to_world"]),
+    ("sampler", "independent", &["sample_count", "seed"]),
+    ("film", "hdrfilm", &["width", "height", "pixel_format", "component_format", "file_format"]),
+    ("rfilter", "box", &[]),
+    ("shape", "sphere", &["center", "radius", "to_world", "flip_normals"]),
+    ("shape", "cube", SHAPE_PARAMS),
+    ("shape", "rectangle", SHAPE_PARAMS),
+    ("shape", "disk", SHAPE_PARAMS),
+    ("shape", "obj", MESH_FILE_PARAMS),
+    ("shape", "ply", MESH_FILE_PARAMS),
+    ("bsdf", "null", &[]),
+    ("bsdf", "diffuse", &["reflectance"]),
+    ("bsdf", "dielectric", &["int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"]),
+    ("medium", "homogeneous", &["sigma_t", "albedo", "scale", "sample_emitters"]),
+    ("phase", "isotropic", &[]),
+    ("phase", "hg", &["g"]),
+    ("emitter", "point", &["position", "intensity", "to_world"]),
+    ("emitter", "spot", &["to_world", "intensity", "cutoff_angle", "beam_width"]),
+    ("emitter", "area", &["radiance"]),
+    ("emitter", "constant", &["radiance"]),
+];
+
+/// Every supported `(kind, type, parameters)`; see [`PluginEntry`].
+pub fn supported_plugins() -> &'static [PluginEntry] {
+    PLUGINS
+}
+
+/// The parameters of plugin `ty` of `kind`, or `None` if haze does not support it.
+pub(super) fn parameters(kind: &str, ty: &str) -> Option<&'static [&'static str]> {
+    PLUGINS.iter().find(|(k, t, _)| *k == kind && *t == ty).map(|(_, _, p)| *p)
+}
+
+/// The supported types of `kind`, comma-separated, for messages.
+pub(super) fn types_of(kind: &str) -> String {
+    let types: Vec<&str> = PLUGINS.iter().filter(|(k, _, _)| *k == kind).map(|(_, t, _)| *t).collect();
+    types.join(", ")
+}
+
+/// True for the tags of plugin objects haze knows (it supports at least one type of each).
+pub(super) fn is_supported_kind(tag: &str) -> bool {
+    PLUGINS.iter().any(|(k, _, _)| *k == tag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `docs/mitsuba-compat.md` must have, for every plugin, a table row naming its kind, its
+    /// type and each of its parameters, so that the document cannot drift from the loader.
+    #[test]
+    fn compat_doc_mentions_every_plugin_and_parameter() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/mitsuba-compat.md");
+        let doc = std::fs::read_to_string(path).expect("docs/mitsuba-compat.md is readable");
+        for (kind, ty, params) in supported_plugins() {
+            let row = doc.lines().find(|l| l.starts_with(&format!("| {kind} | `{ty}` |")));
+            let Some(row) = row else {
+                panic!("docs/mitsuba-compat.md has no row `| {kind} | `{ty}` | ...`");
+            };
+            for p in *params {
+                assert!(row.contains(&format!("`{p}`")), "the row of {kind} `{ty}` does not mention `{p}`");
+            }
+        }
+    }
+
+    #[test]
+    fn entries_are_unique() {
+        for (i, (k, t, _)) in PLUGINS.iter().enumerate() {
+            assert!(PLUGINS[..i].iter().all(|(k2, t2, _)| (k2, t2) != (k, t)), "{k} {t} listed twice");
+        }
+    }
+}

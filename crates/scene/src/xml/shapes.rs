@@ -1,0 +1,217 @@
+//! Shape plugins `sphere`, `cube`, `rectangle`, `disk`, `obj` and `ply`, with their BSDF,
+//! interior/exterior media and area emitter.
+
+use super::builder::Builder;
+use super::document::Element;
+use super::params::Params;
+use super::transform::uniform_scale;
+use super::{bsdfs, emitters, obj, ply, LoadError};
+use crate::bsdf::Bsdf;
+use crate::emitter::Emitter;
+use crate::medium::MediumId;
+use crate::shape::{cube_mesh, rectangle_mesh, Geometry, Shape, TriangleMesh};
+use glam::{Mat3, Mat4, Vec3};
+use haze_core::Rgb;
+
+/// Builds shape `el` and adds it (and its area emitter) to the scene.
+///
+/// Every shape takes `to_world` (identity) and `flip_normals` (false); one `<bsdf>` (nested or
+/// `<ref>`; Mitsuba 3's default is `diffuse` with reflectance 0.5); media named `interior`
+/// and `exterior` (nested `<medium name="interior">` or `<ref name="interior" id=".."/>`);
+/// and one nested `<emitter type="area">`.
+pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), LoadError> {
+    let p = b.params(el)?;
+    let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let flip_normals = p.bool("flip_normals", false)?;
+    let geometry = match p.ty() {
+        "sphere" => sphere(&p, &to_world, flip_normals)?,
+        "cube" => {
+            require_invertible(&p, &to_world)?;
+            Geometry::Mesh(cube_mesh(&to_world, flip_normals))
+        }
+        "rectangle" => {
+            require_planar_rank(&p, &to_world)?;
+            Geometry::Mesh(rectangle_mesh(&to_world, flip_normals))
+        }
+        "disk" => {
+            require_planar_rank(&p, &to_world)?;
+            Geometry::Disk { to_world, flip_normals }
+        }
+        _ => Geometry::Mesh(mesh_file(b, &p, &to_world, flip_normals)?),
+    };
+
+    let mut bsdf: Option<Bsdf> = None;
+    let mut interior: Option<MediumId> = None;
+    let mut exterior: Option<MediumId> = None;
+    let mut radiance: Option<Rgb> = None;
+    for o in p.objects(&["bsdf", "medium", "emitter"]) {
+        let twice = |what: &str| o.site.error(format!("{} takes one {what}", el.describe()));
+        match o.target.tag.as_str() {
+            "bsdf" => {
+                if let Some(name @ ("interior" | "exterior")) = o.name {
+                    return Err(o.site.error(format!("'{name}' must be a medium, not a <bsdf>")));
+                }
+                if bsdf.is_some() {
+                    return Err(twice("<bsdf>"));
+                }
+                bsdf = Some(bsdfs::build(&p.nested(o.target)?)?);
+            }
+            "medium" => {
+                let slot = match o.name {
+                    Some("interior") => &mut interior,
+                    Some("exterior") => &mut exterior,
+                    _ => {
+                        return Err(o
+                            .site
+                            .error("a medium in a shape must be named \"interior\" or \"exterior\""))
+                    }
+                };
+                if slot.is_some() {
+                    return Err(twice("medium of each name"));
+                }
+                *slot = Some(b.medium(o.target)?);
+            }
+            _ => {
+                if o.site.tag == "ref" {
+                    return Err(o.site.error("an area emitter must be nested in its shape, not referenced"));
+                }
+                if radiance.is_some() {
+                    return Err(twice("<emitter>"));
+                }
+                let ep = p.nested(o.target)?;
+                if ep.ty() != "area" {
+                    return Err(o.target.error(format!(
+                        "only an area emitter can be attached to a shape, not '{}'",
+                        ep.ty()
+                    )));
+                }
+                radiance = Some(emitters::area_radiance(&ep)?);
+            }
+        }
+    }
+    p.finish()?;
+
+    let shape_index = b.shapes.len() as u32;
+    let emitter = radiance.map(|radiance| {
+        b.emitters.push(Emitter::Area { shape: shape_index, radiance });
+        (b.emitters.len() - 1) as u32
+    });
+    let filename = match p.ty() {
+        "obj" | "ply" => p.string_opt("filename")?,
+        _ => None,
+    };
+    let name = match (el.attr("id"), filename) {
+        (Some(id), _) => id.to_string(),
+        (None, Some(file)) => format!("{} \"{file}\"", p.ty()),
+        (None, None) => p.ty().to_string(),
+    };
+    b.shapes.push(Shape {
+        name,
+        geometry,
+        bsdf: bsdf.unwrap_or(Bsdf::Diffuse { reflectance: Rgb::splat(0.5) }),
+        interior,
+        exterior,
+        emitter,
+    });
+    Ok(())
+}
+
+/// `sphere`: `center` (origin) and `radius` (1), then `to_world`, which may rotate, translate
+/// and scale uniformly (Mitsuba 3 forbids non-uniform scales and shears here too).
+fn sphere(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, LoadError> {
+    let center = p.point_opt("center")?.unwrap_or(Vec3::ZERO);
+    let radius = p.float("radius", 1.0)?;
+    if radius <= 0.0 {
+        return Err(p.error_at("radius", format!("'radius' must be > 0, got {radius}")));
+    }
+    let scale = uniform_scale(to_world).ok_or_else(|| {
+        p.error_at("to_world", "a sphere's to_world may only rotate, translate and scale uniformly")
+    })?;
+    Ok(Geometry::Sphere { center: to_world.transform_point3(center), radius: radius * scale, flip_normals })
+}
+
+fn require_invertible(p: &Params, to_world: &Mat4) -> Result<Mat3, LoadError> {
+    let l = Mat3::from_mat4(*to_world);
+    if l.determinant().abs() <= 1e-12 {
+        return Err(p.error_at("to_world", "to_world is singular (flattens the shape)"));
+    }
+    Ok(l)
+}
+
+/// A planar shape needs its local x and y axes to stay independent.
+fn require_planar_rank(p: &Params, to_world: &Mat4) -> Result<(), LoadError> {
+    let x = to_world.transform_vector3(Vec3::X);
+    let y = to_world.transform_vector3(Vec3::Y);
+    if x.cross(y).length() <= 1e-12 {
+        return Err(p.error_at("to_world", "to_world flattens the shape to a line or a point"));
+    }
+    Ok(())
+}
+
+/// `obj` and `ply`: `filename` (required; relative to the scene file's directory),
+/// `face_normals` (false: keep the file's vertex normals), `flip_tex_coords` (Mitsuba 3
+/// defaults: true for OBJ, false for PLY). Positions go to world space with `to_world`,
+/// normals with its inverse transpose.
+fn mesh_file(
+    b: &Builder,
+    p: &Params,
+    to_world: &Mat4,
+    flip_normals: bool,
+) -> Result<TriangleMesh, LoadError> {
+    let filename =
+        p.string_opt("filename")?.ok_or_else(|| p.element().error("missing parameter 'filename'"))?;
+    let face_normals = p.bool("face_normals", false)?;
+    let flip_tex_coords = p.bool("flip_tex_coords", p.ty() == "obj")?;
+    let linear = require_invertible(p, to_world)?;
+    let path = b.doc.resolve(filename, p.element());
+    let load = if p.ty() == "obj" { obj::load } else { ply::load };
+    // The mesh parsers are third-party code; some index arithmetic in them can overflow (a
+    // panic in debug builds) on hostile files. A bad file must be an error, never a crash.
+    let loaded = std::panic::catch_unwind(|| load(&path))
+        .unwrap_or_else(|_| Err("the file is malformed (the parser gave up)".to_string()));
+    let mut mesh = loaded
+        .and_then(|m| check_mesh(&m).map(|()| m))
+        .map_err(|e| p.element().error(format!("cannot load mesh file '{}': {e}", path.display())))?;
+
+    for v in &mut mesh.positions {
+        *v = to_world.transform_point3(*v);
+    }
+    mesh.normals = if face_normals { None } else { mesh.normals.take() };
+    if let Some(normals) = mesh.normals.as_mut() {
+        let normal_matrix = linear.inverse().transpose();
+        for n in normals {
+            *n = (normal_matrix * *n).normalize_or_zero();
+        }
+    }
+    if flip_tex_coords {
+        for uv in mesh.uvs.iter_mut().flatten() {
+            uv.y = 1.0 - uv.y;
+        }
+    }
+    mesh.flip_normals = flip_normals;
+    Ok(mesh)
+}
+
+/// A mesh the renderer can use: triangles, in-range indices, finite positions, and attribute
+/// arrays as long as the position array.
+fn check_mesh(m: &TriangleMesh) -> Result<(), String> {
+    if m.indices.is_empty() {
+        return Err("the mesh has no triangles".into());
+    }
+    let n = m.positions.len();
+    if let Some(t) = m.indices.iter().find(|t| t.iter().any(|&i| i as usize >= n)) {
+        return Err(format!(
+            "a triangle ({}, {}, {}) refers to a vertex beyond the {n} vertices",
+            t[0], t[1], t[2]
+        ));
+    }
+    if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("vertex {i} has a non-finite position"));
+    }
+    let normals_ok = m.normals.as_ref().is_none_or(|v| v.len() == n);
+    let uvs_ok = m.uvs.as_ref().is_none_or(|v| v.len() == n);
+    if !(normals_ok && uvs_ok) {
+        return Err("per-vertex attribute arrays differ in length from the positions".into());
+    }
+    Ok(())
+}
