@@ -1,0 +1,8 @@
+//! Many-light rendering of participating media (Novak et al. 2012; Vibert et al. 2019).
+//!
+//! - [`vrl`]: virtual ray lights — joint importance sampling of a camera-segment point and a
+//!   VRL point, and the medium-to-medium contribution estimator.
+//! - [`vpl`]: virtual point lights — equiangular sampling towards a VPL and its estimator.
+
+pub mod vpl;
+pub mod vrl;
