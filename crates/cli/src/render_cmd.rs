@@ -23,7 +23,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "time")]
     pub spp: Option<u32>,
     /// Render for this many seconds instead of a fixed sample count.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Seed of every random choice; the same seed gives the same image.
     #[arg(long, default_value_t = 0)]

@@ -1,0 +1,146 @@
+//! The `haze` binary end to end: bad input gives a clear error and a non-zero exit (never a
+//! panic), images are reproducible across thread counts, components sum to the full image, and
+//! no output contains NaN or Inf.
+
+use haze_render::image_io::RgbImage;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+
+fn repo(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
+}
+
+fn shared(rel: &str) -> PathBuf {
+    repo("../shared").join(rel)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("haze-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn haze(args: &[&str]) -> Output {
+    Command::new(HAZE).args(args).output().expect("haze runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Exit code 1 with an `error:` line; a panic would exit with 101 and print "panicked".
+fn assert_clean_failure(o: &Output, context: &str) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "{context}: exit {:?}\n{err}", o.status.code());
+    assert!(err.starts_with("error: "), "{context}: {err}");
+    assert!(!err.contains("panicked"), "{context}: {err}");
+    err
+}
+
+#[test]
+fn every_bad_scene_is_a_clear_error_not_a_panic() {
+    let corpus = repo("tests/bad-scenes");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&corpus)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "xml"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 20, "corpus has {} scenes", scenes.len());
+    let out = tmp("bad.exr");
+    for scene in &scenes {
+        let o = haze(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--quiet"]);
+        let err = assert_clean_failure(&o, &scene.display().to_string());
+        assert!(err.contains(&scene.display().to_string()), "error does not name the file: {err}");
+        let expected = std::fs::read_to_string(scene.with_extension("expected")).unwrap();
+        for want in expected.lines().filter(|l| !l.is_empty()) {
+            assert!(err.contains(want), "{}: `{err}` lacks `{want}`", scene.display());
+        }
+    }
+    assert!(!out.exists(), "a failed load must not write an image");
+}
+
+#[test]
+fn bad_command_line_values_are_clear_errors() {
+    let scene = shared("validation/scenes/hg-box.xml");
+    let s = scene.to_str().unwrap();
+    let out = tmp("x.exr");
+    let o = out.to_str().unwrap();
+    for (args, want) in [
+        (vec!["render", s, "-o", o, "--spp", "0"], "--spp must be at least 1"),
+        (vec!["render", s, "-o", o, "--time", "-2"], "--time must be a positive number"),
+        (vec!["render", s, "-o", o, "--time", "NaN"], "--time must be a positive number"),
+        (vec!["render", s, "-o", o, "--threads", "0", "--spp", "1"], "--threads must be at least 1"),
+        (vec!["render", s, "-o", o, "--integrator", "bdpt", "--spp", "1"], "unknown integrator 'bdpt'"),
+        (vec!["render", s, "-o", o, "-D", "novalue", "--spp", "1"], "-D expects NAME=VALUE"),
+        (vec!["render", "/nonexistent/scene.xml", "-o", o], "/nonexistent/scene.xml"),
+    ] {
+        let e = assert_clean_failure(&haze(&args), &args.join(" "));
+        assert!(e.contains(want), "{}: `{e}` lacks `{want}`", args.join(" "));
+    }
+}
+
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"];
+    args.extend_from_slice(extra);
+    let o = haze(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    o
+}
+
+#[test]
+fn same_seed_gives_the_same_image_for_any_thread_count() {
+    let scene = shared("validation/scenes/foggy-room.xml");
+    let (a, b, c) = (tmp("t1.exr"), tmp("t2.exr"), tmp("seed2.exr"));
+    render(&scene, &a, &["--spp", "4", "--seed", "7", "--threads", "1"]);
+    render(&scene, &b, &["--spp", "4", "--seed", "7", "--threads", "2"]);
+    render(&scene, &c, &["--spp", "4", "--seed", "8", "--threads", "2"]);
+    let (ia, ib, ic) = (RgbImage::read_exr(&a).unwrap(), RgbImage::read_exr(&b).unwrap(), RgbImage::read_exr(&c).unwrap());
+    assert!(ia.data == ib.data, "thread count changed the image");
+    assert!(ia.data != ic.data, "the seed had no effect");
+    assert!(a.with_extension("png").exists());
+}
+
+#[test]
+fn components_sum_to_the_full_image_and_are_finite() {
+    for name in ["foggy-room", "hg-box"] {
+        let scene = shared(&format!("validation/scenes/{name}.xml"));
+        let out = tmp(&format!("{name}.exr"));
+        let var = tmp(&format!("{name}-var.exr"));
+        render(&scene, &out, &["--spp", "4", "--components", "--variance-out", var.to_str().unwrap()]);
+        let full = RgbImage::read_exr(&out).unwrap();
+        let mut sum = vec![0.0f64; full.data.len()];
+        for comp in ["emitted", "single", "multiple", "surface"] {
+            let p = out.with_file_name(format!("{name}_{comp}.exr"));
+            let img = RgbImage::read_exr(&p).unwrap_or_else(|e| panic!("{comp}: {e}"));
+            assert!(img.data.iter().all(|v| v.is_finite() && *v >= 0.0), "{comp} has NaN, Inf or negative values");
+            for (s, v) in sum.iter_mut().zip(&img.data) {
+                *s += *v as f64;
+            }
+        }
+        assert!(full.data.iter().all(|v| v.is_finite()));
+        for (i, (s, f)) in sum.iter().zip(&full.data).enumerate() {
+            assert!((s - *f as f64).abs() <= 1e-5 * (1.0 + f.abs() as f64), "{name} value {i}: components sum {s}, full {f}");
+        }
+        // Both scenes have black surfaces only, so the multiple-scattering part must be non-zero
+        // and the surface part zero.
+        let multiple = RgbImage::read_exr(&out.with_file_name(format!("{name}_multiple.exr"))).unwrap();
+        assert!(multiple.data.iter().any(|v| *v > 0.0));
+        let surface = RgbImage::read_exr(&out.with_file_name(format!("{name}_surface.exr"))).unwrap();
+        assert!(surface.data.iter().all(|v| *v == 0.0));
+        let v = RgbImage::read_exr(&var).unwrap();
+        assert!(v.data.iter().all(|x| x.is_finite() && *x >= 0.0));
+    }
+}
+
+#[test]
+fn time_budget_renders_progressively() {
+    let scene = shared("validation/scenes/hg-box.xml");
+    let out = tmp("timed.exr");
+    let o = render(&scene, &out, &["--time", "0.5"]);
+    let err = stderr(&o);
+    assert!(err.contains("passes"), "{err}");
+    assert!(RgbImage::read_exr(&out).unwrap().data.iter().any(|v| *v > 0.0));
+}
