@@ -51,7 +51,8 @@ fn every_bad_scene_is_a_clear_error_not_a_panic() {
     assert!(scenes.len() >= 20, "corpus has {} scenes", scenes.len());
     let out = tmp("bad.exr");
     for scene in &scenes {
-        let o = haze(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--quiet"]);
+        let o =
+            haze(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--quiet"]);
         let err = assert_clean_failure(&o, &scene.display().to_string());
         assert!(err.contains(&scene.display().to_string()), "error does not name the file: {err}");
         let expected = std::fs::read_to_string(scene.with_extension("expected")).unwrap();
@@ -97,7 +98,8 @@ fn same_seed_gives_the_same_image_for_any_thread_count() {
     render(&scene, &a, &["--spp", "4", "--seed", "7", "--threads", "1"]);
     render(&scene, &b, &["--spp", "4", "--seed", "7", "--threads", "2"]);
     render(&scene, &c, &["--spp", "4", "--seed", "8", "--threads", "2"]);
-    let (ia, ib, ic) = (RgbImage::read_exr(&a).unwrap(), RgbImage::read_exr(&b).unwrap(), RgbImage::read_exr(&c).unwrap());
+    let (ia, ib, ic) =
+        (RgbImage::read_exr(&a).unwrap(), RgbImage::read_exr(&b).unwrap(), RgbImage::read_exr(&c).unwrap());
     assert!(ia.data == ib.data, "thread count changed the image");
     assert!(ia.data != ic.data, "the seed had no effect");
     assert!(a.with_extension("png").exists());
@@ -115,14 +117,20 @@ fn components_sum_to_the_full_image_and_are_finite() {
         for comp in ["emitted", "single", "multiple", "surface"] {
             let p = out.with_file_name(format!("{name}_{comp}.exr"));
             let img = RgbImage::read_exr(&p).unwrap_or_else(|e| panic!("{comp}: {e}"));
-            assert!(img.data.iter().all(|v| v.is_finite() && *v >= 0.0), "{comp} has NaN, Inf or negative values");
+            assert!(
+                img.data.iter().all(|v| v.is_finite() && *v >= 0.0),
+                "{comp} has NaN, Inf or negative values"
+            );
             for (s, v) in sum.iter_mut().zip(&img.data) {
                 *s += *v as f64;
             }
         }
         assert!(full.data.iter().all(|v| v.is_finite()));
         for (i, (s, f)) in sum.iter().zip(&full.data).enumerate() {
-            assert!((s - *f as f64).abs() <= 1e-5 * (1.0 + f.abs() as f64), "{name} value {i}: components sum {s}, full {f}");
+            assert!(
+                (s - *f as f64).abs() <= 1e-5 * (1.0 + f.abs() as f64),
+                "{name} value {i}: components sum {s}, full {f}"
+            );
         }
         // Both scenes have black surfaces only, so the multiple-scattering part must be non-zero
         // and the surface part zero.

@@ -174,3 +174,47 @@ fn white_furnace_in_infinite_scattering_medium() {
         );
     }
 }
+
+/// A glass ball (with and without a non-absorbing medium inside) under a uniform environment is
+/// invisible: every path ends in the environment, and the 1/eta^2 radiance scaling on entry is
+/// undone on exit. Checks refraction, Fresnel sampling, total internal reflection and medium
+/// tracking across a dielectric boundary.
+#[test]
+fn glass_ball_white_furnace() {
+    for interior in [None, Some(0u32)] {
+        let shapes = vec![Shape {
+            name: "glass".into(),
+            geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
+            bsdf: Bsdf::Dielectric { eta: 1.5 },
+            interior,
+            exterior: None,
+            emitter: None,
+        }];
+        let scene = Scene::new(
+            None,
+            camera(None),
+            1,
+            IntegratorSpec::default(),
+            shapes,
+            vec![medium(Rgb::new(0.5, 1.0, 2.0), Rgb::ONE, Phase::HenyeyGreenstein { g: -0.4 })],
+            vec![Emitter::Constant { radiance: Rgb::ONE }],
+        );
+        for o in [Vec3::new(0.0, 0.0, -4.0), Vec3::new(0.6, 0.0, -4.0), Vec3::new(0.0, 0.95, -4.0)] {
+            let (mean, se) = estimate(&scene, Ray::new(o, Vec3::Z), None, 20_000, 5);
+            let total = mean.total();
+            let se_total: Rgb = se.0.iter().copied().sum();
+            for c in 0..3 {
+                assert!(
+                    (total[c] - 1.0).abs() < 4.0 * se_total[c] + 2e-3,
+                    "interior {interior:?}, origin {o}: channel {c} = {} (se {})",
+                    total[c],
+                    se_total[c]
+                );
+            }
+            assert!(
+                mean.get(Component::Surface).max_component() > 0.9,
+                "light through glass is surface light"
+            );
+        }
+    }
+}
