@@ -152,3 +152,24 @@ fn time_budget_renders_progressively() {
     assert!(err.contains("passes"), "{err}");
     assert!(RgbImage::read_exr(&out).unwrap().data.iter().any(|v| *v > 0.0));
 }
+
+/// Ctrl-C (SIGINT) finishes the current pass and writes the image of the passes done so far.
+#[test]
+fn interrupt_writes_the_passes_finished_so_far() {
+    let scene = shared("validation/scenes/foggy-room.xml");
+    let out = tmp("interrupted.exr");
+    let child = Command::new(HAZE)
+        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--time", "60", "--quiet"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "exit {:?}: {err}", o.status.code());
+    assert!(err.contains("interrupted"), "{err}");
+    let img = RgbImage::read_exr(&out).unwrap();
+    assert!(img.data.iter().all(|v| v.is_finite()) && img.data.iter().any(|v| *v > 0.0));
+}

@@ -3,6 +3,8 @@
 //! - [`vrl`]: virtual ray lights — joint importance sampling of a camera-segment point and a
 //!   VRL point, and the medium-to-medium contribution estimator.
 //! - [`vpl`]: virtual point lights — equiangular sampling towards a VPL and its estimator.
+//! - [`lighttrace`]: light tracing that turns light-path segments into VRLs and vertices into VPLs.
 
+pub mod lighttrace;
 pub mod vpl;
 pub mod vrl;

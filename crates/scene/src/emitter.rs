@@ -30,3 +30,13 @@ impl Emitter {
         ((cutoff_angle - cos_t.clamp(-1.0, 1.0).acos()) / (cutoff_angle - beam_width)).clamp(0.0, 1.0)
     }
 }
+
+impl Emitter {
+    /// The shape of an area emitter.
+    pub fn area_shape(&self) -> Option<u32> {
+        match self {
+            Emitter::Area { shape, .. } => Some(*shape),
+            _ => None,
+        }
+    }
+}

@@ -6,6 +6,7 @@
 //! reference point.
 
 use crate::emitter::Emitter;
+use crate::medium::MediumId;
 use crate::scene::Scene;
 use crate::shape::{AreaSampler, Shape};
 use glam::{Vec2, Vec3};
@@ -158,5 +159,122 @@ impl Scene {
             Emitter::Area { radiance, .. } if n.dot(w) > 0.0 => Some((e, *radiance)),
             _ => None,
         }
+    }
+}
+
+/// A sampled emission: where light leaves an emitter, in which direction, and with what weight.
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    pub p: Vec3,
+    /// Unit direction of the emitted light.
+    pub d: Vec3,
+    /// Surface normal at `p` for area lights (to offset the ray origin), `None` for point lights.
+    pub n: Option<Vec3>,
+    /// `L_e cos / (p_select p_pos p_dir)`: the emitted power per sample, in watts.
+    pub weight: Rgb,
+    pub emitter: u32,
+}
+
+/// Why an emitter cannot start light paths.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EmissionError {
+    NoEmitters,
+    /// `constant` (environment) emitters have no finite emitting surface to start paths from.
+    Environment,
+}
+
+impl std::fmt::Display for EmissionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EmissionError::NoEmitters => write!(f, "the scene has no emitters to trace light from"),
+            EmissionError::Environment => write!(
+                f,
+                "light tracing does not support 'constant' (environment) emitters; use volpath for this scene"
+            ),
+        }
+    }
+}
+
+impl Scene {
+    /// Checks that every emitter can start light paths.
+    pub fn check_emission(&self) -> Result<(), EmissionError> {
+        if self.emitters.is_empty() {
+            return Err(EmissionError::NoEmitters);
+        }
+        if self.emitters.iter().any(|e| matches!(e, Emitter::Constant { .. })) {
+            return Err(EmissionError::Environment);
+        }
+        Ok(())
+    }
+
+    /// Samples the start of a light path: an emitter chosen uniformly, a point on it and a
+    /// direction. Point lights emit uniformly over the sphere (`weight = 4 pi I N`), spot lights
+    /// uniformly in their cutoff cone (`weight = I falloff 2 pi (1 - cos_cutoff) N`), area lights
+    /// from a uniform point with a cosine-weighted direction on the normal side
+    /// (`weight = L pi A N`), `N` the number of emitters.
+    pub fn sample_emission(&self, u_select: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
+        use haze_core::sampling::{sample_cosine_hemisphere, sample_uniform_cone, uniform_cone_pdf};
+        use haze_core::Frame;
+        let n = self.emitters.len();
+        if n == 0 {
+            return None;
+        }
+        let idx = ((u_select * n as f32) as usize).min(n - 1);
+        let sel = n as f32;
+        match &self.emitters[idx] {
+            Emitter::Point { position, intensity } => Some(EmissionSample {
+                p: *position,
+                d: sample_uniform_sphere(u_dir),
+                n: None,
+                weight: *intensity * (4.0 * haze_core::PI * sel),
+                emitter: idx as u32,
+            }),
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => {
+                let cos_max = cutoff_angle.cos();
+                let local = sample_uniform_cone(u_dir, cos_max);
+                let f = Emitter::spot_falloff(*cutoff_angle, *beam_width, local);
+                let d = to_world.transform_vector3(local).normalize();
+                (f > 0.0).then(|| EmissionSample {
+                    p: to_world.transform_point3(Vec3::ZERO),
+                    d,
+                    n: None,
+                    weight: *intensity * (f * sel / uniform_cone_pdf(cos_max)),
+                    emitter: idx as u32,
+                })
+            }
+            Emitter::Area { shape, radiance } => {
+                let sh = &self.shapes[*shape as usize];
+                let table = self.emitter_tables.area[idx].as_ref()?;
+                let s = table.sample(sh, u_pos);
+                let d = Frame::from_normal(s.n).to_world(sample_cosine_hemisphere(u_dir));
+                Some(EmissionSample {
+                    p: s.p,
+                    d,
+                    n: Some(s.n),
+                    weight: *radiance * (haze_core::PI * table.area * sel),
+                    emitter: idx as u32,
+                })
+            }
+            Emitter::Constant { .. } => None,
+        }
+    }
+
+    /// Medium containing the point `p`, found by casting a ray and looking at the first shape
+    /// that declares media: arriving at it from its inside (the ray leaves through the side the
+    /// normal points to) means `p` is in its interior medium, otherwise in its exterior medium.
+    /// Shapes without media are skipped, as they do not change the medium (Mitsuba 3's rule).
+    pub fn medium_at(&self, p: Vec3) -> Option<MediumId> {
+        // An irrational-ish direction avoids grazing axis-aligned geometry.
+        let d = Vec3::new(0.267_261_24, 0.801_783_7, 0.534_522_5);
+        let mut ray = haze_core::Ray::new(p, d);
+        for _ in 0..1024 {
+            let h = self.intersect(&ray)?;
+            let s = &self.shapes[h.shape as usize];
+            if s.is_medium_transition() {
+                return if d.dot(h.n) > 0.0 { s.interior } else { s.exterior };
+            }
+            ray = haze_core::Ray::new(haze_core::ray::offset_origin(h.p, h.n, d), d);
+        }
+        None
     }
 }

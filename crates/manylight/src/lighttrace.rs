@@ -1,0 +1,290 @@
+//! Light tracing into virtual lights: every medium segment of a light path becomes a virtual ray
+//! light (VRL) and every medium scattering vertex a virtual point light (VPL).
+//!
+//! ## What is recorded, and why it is unbiased
+//! Free-flight distances are sampled from the hero channel's exponential with path-level
+//! spectral MIS (as in `volpath`; `haze_core::transmittance`). A segment starts at `o` (the
+//! emitter, a scattering vertex, or a surface) and ends where the sampled distance or the next
+//! surface puts it ("short" VRLs, the segments of the light path themselves). Its point at
+//! distance `v` exists with the probability that the sampled distance exceeds `v`,
+//! `T_hero(v)`, so the light arriving there is, per channel,
+//!
+//! ```text
+//!   Phi(v) = beta * T(v) / mean_c(r_c T_c(v))
+//! ```
+//!
+//! with `beta` the throughput (power / paths) at `o` divided by the hero pdfs so far and `r` the
+//! pdf ratios of the other channels. For grey extinction `T` cancels and `Phi` is constant along
+//! the segment. [`VrlRecord::flux_at`] evaluates it. A VPL at a scattering vertex carries
+//! `beta sigma_s / mean(r)` after that vertex (`sigma_s` of the vertex included).
+//!
+//! Dielectric interfaces are crossed with the adjoint BSDF: light tracing transports importance,
+//! so the `1/eta^2` radiance compression of refraction is not applied (Veach 1997, Sec. 5.2).
+
+use glam::Vec3;
+use haze_core::ray::offset_origin;
+use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
+use haze_core::{Ray, Rgb, Sampler};
+use haze_scene::lights::EmissionError;
+use haze_scene::{MediumId, Scene};
+use rayon::prelude::*;
+
+/// One medium segment of a light path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VrlRecord {
+    pub o: Vec3,
+    /// Unit direction of propagation.
+    pub d: Vec3,
+    pub len: f32,
+    /// Throughput at `o` in watts (emitted power / number of light paths / hero pdfs so far).
+    pub beta: Rgb,
+    /// Spectral-MIS pdf ratios `p_c / p_hero` of the path up to `o`.
+    pub ratio: Rgb,
+    pub medium: MediumId,
+    /// True if the light path bounced off a non-null surface before this segment: paths through
+    /// it belong to the `surface` component.
+    pub after_surface: bool,
+}
+
+impl VrlRecord {
+    /// Flux at distance `v` along the segment, `beta T(v) / mean(r T(v))` (see module docs).
+    #[inline]
+    pub fn flux_at(&self, sigma_t: Rgb, v: f32) -> Rgb {
+        let t = sigma_t.exp_neg(v);
+        let m = (self.ratio * t).mean();
+        if m > 0.0 {
+            self.beta * t / m
+        } else {
+            Rgb::ZERO
+        }
+    }
+
+    /// Largest flux anywhere on the segment, per channel (for light-cluster bounds):
+    /// `Phi_c(v) <= 3 beta_c / r_c` because `mean(r T) >= r_c T_c / 3`.
+    pub fn flux_bound(&self) -> Rgb {
+        Rgb(std::array::from_fn(|c| if self.ratio[c] > 0.0 { 3.0 * self.beta[c] / self.ratio[c] } else { 0.0 }))
+    }
+}
+
+/// A medium scattering vertex of a light path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VplRecord {
+    pub p: Vec3,
+    /// Propagation direction of the light arriving at `p`.
+    pub d_in: Vec3,
+    /// Light leaving the vertex per unit phase function, in watts: `beta sigma_s / mean(r)`.
+    pub flux: Rgb,
+    pub medium: MediumId,
+    pub after_surface: bool,
+}
+
+/// The virtual lights of one pass.
+#[derive(Clone, Debug, Default)]
+pub struct LightSet {
+    pub vrls: Vec<VrlRecord>,
+    pub vpls: Vec<VplRecord>,
+    /// Light paths traced (the normalisation: every flux is already divided by it).
+    pub paths: u64,
+}
+
+/// Settings of light tracing.
+#[derive(Clone, Debug)]
+pub struct LightTraceSettings {
+    /// Most scattering events (medium and surface) on a light path; `u32::MAX` for no limit.
+    pub max_events: u32,
+    /// Events after which Russian roulette on the relative throughput starts.
+    pub rr_events: u32,
+}
+
+impl LightTraceSettings {
+    /// Limits that keep every camera connection within the scene's `max_depth` as `volpath`
+    /// counts it: a VRL connection adds two events (the VRL point and the camera point) and
+    /// volpath evaluates paths with at most `max_depth - 1` events.
+    pub fn from_max_depth(max_depth: i32) -> Self {
+        let max_events = if max_depth < 0 { u32::MAX } else { (max_depth as u32).saturating_sub(3) };
+        LightTraceSettings { max_events, rr_events: 8 }
+    }
+}
+
+/// Traces `paths` light paths for `pass` and collects their virtual lights. Path `i` uses the
+/// sampler `Sampler::new(seed ^ LIGHT_STREAM, i, pass)`, and chunks are concatenated in path
+/// order, so the result does not depend on the thread count.
+pub fn trace_light_paths(
+    scene: &Scene,
+    paths: u64,
+    seed: u64,
+    pass: u32,
+    settings: &LightTraceSettings,
+) -> Result<LightSet, EmissionError> {
+    scene.check_emission()?;
+    const CHUNK: u64 = 256;
+    let chunks: Vec<LightSet> = (0..paths.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut set = LightSet::default();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(paths) {
+                let mut s = Sampler::new(seed ^ LIGHT_STREAM, i, pass as u64);
+                trace_one(scene, &mut s, 1.0 / paths as f32, settings, &mut set);
+            }
+            set
+        })
+        .collect();
+    let mut out = LightSet { paths, ..Default::default() };
+    out.vrls.reserve(chunks.iter().map(|c| c.vrls.len()).sum());
+    out.vpls.reserve(chunks.iter().map(|c| c.vpls.len()).sum());
+    for c in chunks {
+        out.vrls.extend_from_slice(&c.vrls);
+        out.vpls.extend_from_slice(&c.vpls);
+    }
+    Ok(out)
+}
+
+/// Separates light-path random streams from camera-path streams with the same seed.
+const LIGHT_STREAM: u64 = 0x5eed_11c7_a11_7e5;
+
+/// Number of light paths that yields about `target` VRLs, from a pilot of `pilot` paths traced
+/// with a stream of its own. Fixing the path count in advance (rather than stopping once
+/// `target` VRLs exist) keeps the estimate unbiased: a data-dependent stopping rule would not.
+pub fn paths_for_vrl_count(
+    scene: &Scene,
+    target: u64,
+    seed: u64,
+    settings: &LightTraceSettings,
+) -> Result<u64, EmissionError> {
+    let pilot = 2000u64;
+    let set = trace_light_paths(scene, pilot, seed ^ 0x9170_7000, u32::MAX, settings)?;
+    let per_path = set.vrls.len() as f64 / pilot as f64;
+    if per_path == 0.0 {
+        return Ok(target.max(1));
+    }
+    Ok(((target as f64 / per_path).ceil() as u64).max(1))
+}
+
+fn trace_one(scene: &Scene, s: &mut Sampler, inv_paths: f32, settings: &LightTraceSettings, out: &mut LightSet) {
+    let Some(e) = scene.sample_emission(s.next_1d(), s.next_2d(), s.next_2d()) else { return };
+    let power = e.weight * inv_paths;
+    let mut medium = match e.n {
+        Some(n) => {
+            // Area light: the medium on the emitting side, if its shape declares one.
+            let shape = &scene.shapes[scene.emitters[e.emitter as usize].area_shape().unwrap_or(0) as usize];
+            if shape.is_medium_transition() {
+                if e.d.dot(n) > 0.0 {
+                    shape.exterior
+                } else {
+                    shape.interior
+                }
+            } else {
+                scene.medium_at(e.p + n * 1e-4)
+            }
+        }
+        None => scene.medium_at(e.p),
+    };
+    let mut ray = Ray::new(e.n.map_or(e.p, |n| offset_origin(e.p, n, e.d)), e.d);
+    let hero = hero_channel(s.next_1d());
+    // Relative throughput (starts at 1) and pdf ratios; the flux is power * t.
+    let mut t = Rgb::ONE;
+    let mut r = Rgb::ONE;
+    let mut events = 0u32;
+    let mut after_surface = false;
+    let max_len = scene_extent(scene) * 4.0;
+
+    for _ in 0..100_000 {
+        let hit = scene.intersect(&ray);
+        let t_surface = hit.map_or(f32::INFINITY, |h| h.t);
+        if let Some(m) = medium {
+            let med = scene.medium(m);
+            let ff = sample_free_flight(med.sigma_t, t_surface, hero, s.next_1d());
+            let len = match ff {
+                FreeFlight::Interaction { t, .. } => t,
+                FreeFlight::Pass { .. } => t_surface,
+            };
+            if len > 0.0 {
+                out.vrls.push(VrlRecord {
+                    o: ray.o,
+                    d: ray.d,
+                    len: len.min(max_len),
+                    beta: power * t,
+                    ratio: r,
+                    medium: m,
+                    after_surface,
+                });
+            }
+            match ff {
+                FreeFlight::Interaction { t: dist, weight, ratio } => {
+                    t *= weight * med.sigma_s();
+                    r *= ratio;
+                    let p = ray.at(dist);
+                    out.vpls.push(VplRecord {
+                        p,
+                        d_in: ray.d,
+                        flux: power * t / r.mean(),
+                        medium: m,
+                        after_surface,
+                    });
+                    events += 1;
+                    if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
+                        return;
+                    }
+                    let (d, _) = med.phase.sample(ray.d, s.next_2d());
+                    ray = Ray::new(p, d);
+                    continue;
+                }
+                FreeFlight::Pass { weight, ratio } => {
+                    t *= weight;
+                    r *= ratio;
+                }
+            }
+        }
+        let Some(h) = hit else { return };
+        let shape = &scene.shapes[h.shape as usize];
+        if shape.bsdf.is_null() {
+            if shape.is_medium_transition() {
+                medium = if ray.d.dot(h.n) > 0.0 { shape.exterior } else { shape.interior };
+            }
+            ray = Ray::new(offset_origin(h.p, h.n, ray.d), ray.d);
+            continue;
+        }
+        if shape.bsdf.is_black() {
+            return;
+        }
+        let frame = haze_core::Frame::from_normal(h.ns);
+        let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d()) else { return };
+        // Adjoint transport: undo the radiance-only 1/eta^2 factor of refraction.
+        t *= bs.weight * (bs.eta * bs.eta);
+        let d = frame.to_world(bs.wo);
+        if shape.is_medium_transition() {
+            medium = if d.dot(h.n) > 0.0 { shape.exterior } else { shape.interior };
+        }
+        after_surface = true;
+        events += 1;
+        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
+            return;
+        }
+        ray = Ray::new(offset_origin(h.p, h.n, d), d);
+    }
+}
+
+/// Russian roulette on the relative throughput `t / mean(r)` once `events > rr_events`.
+fn survives_roulette(s: &mut Sampler, t: &mut Rgb, r: Rgb, events: u32, settings: &LightTraceSettings) -> bool {
+    if events <= settings.rr_events {
+        return true;
+    }
+    let q = (*t / r.mean()).max_component().min(0.95);
+    if s.next_1d() >= q {
+        return false;
+    }
+    *t /= q;
+    true
+}
+
+/// Diagonal of the scene's geometry (1 if there is none): caps the length of a VRL in an
+/// unbounded medium, where a segment escaping to infinity would otherwise be infinitely long.
+fn scene_extent(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.bounds();
+    let d = (hi - lo).length();
+    if d.is_finite() && d > 0.0 {
+        d
+    } else {
+        1.0
+    }
+}
