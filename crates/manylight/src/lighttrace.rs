@@ -62,7 +62,9 @@ impl VrlRecord {
     /// Largest flux anywhere on the segment, per channel (for light-cluster bounds):
     /// `Phi_c(v) <= 3 beta_c / r_c` because `mean(r T) >= r_c T_c / 3`.
     pub fn flux_bound(&self) -> Rgb {
-        Rgb(std::array::from_fn(|c| if self.ratio[c] > 0.0 { 3.0 * self.beta[c] / self.ratio[c] } else { 0.0 }))
+        Rgb(std::array::from_fn(
+            |c| if self.ratio[c] > 0.0 { 3.0 * self.beta[c] / self.ratio[c] } else { 0.0 },
+        ))
     }
 }
 
@@ -160,7 +162,13 @@ pub fn paths_for_vrl_count(
     Ok(((target as f64 / per_path).ceil() as u64).max(1))
 }
 
-fn trace_one(scene: &Scene, s: &mut Sampler, inv_paths: f32, settings: &LightTraceSettings, out: &mut LightSet) {
+fn trace_one(
+    scene: &Scene,
+    s: &mut Sampler,
+    inv_paths: f32,
+    settings: &LightTraceSettings,
+    out: &mut LightSet,
+) {
     let Some(e) = scene.sample_emission(s.next_1d(), s.next_2d(), s.next_2d()) else { return };
     let power = e.weight * inv_paths;
     let mut medium = match e.n {
@@ -168,13 +176,9 @@ fn trace_one(scene: &Scene, s: &mut Sampler, inv_paths: f32, settings: &LightTra
             // Area light: the medium on the emitting side, if its shape declares one.
             let shape = &scene.shapes[scene.emitters[e.emitter as usize].area_shape().unwrap_or(0) as usize];
             if shape.is_medium_transition() {
-                if e.d.dot(n) > 0.0 {
-                    shape.exterior
-                } else {
-                    shape.interior
-                }
+                shape.medium_towards(e.d, n, None)
             } else {
-                scene.medium_at(e.p + n * 1e-4)
+                scene.medium_at(offset_origin(e.p, n, e.d))
             }
         }
         None => scene.medium_at(e.p),
@@ -238,9 +242,7 @@ fn trace_one(scene: &Scene, s: &mut Sampler, inv_paths: f32, settings: &LightTra
         let Some(h) = hit else { return };
         let shape = &scene.shapes[h.shape as usize];
         if shape.bsdf.is_null() {
-            if shape.is_medium_transition() {
-                medium = if ray.d.dot(h.n) > 0.0 { shape.exterior } else { shape.interior };
-            }
+            medium = shape.medium_towards(ray.d, h.n, medium);
             ray = Ray::new(offset_origin(h.p, h.n, ray.d), ray.d);
             continue;
         }
@@ -252,9 +254,7 @@ fn trace_one(scene: &Scene, s: &mut Sampler, inv_paths: f32, settings: &LightTra
         // Adjoint transport: undo the radiance-only 1/eta^2 factor of refraction.
         t *= bs.weight * (bs.eta * bs.eta);
         let d = frame.to_world(bs.wo);
-        if shape.is_medium_transition() {
-            medium = if d.dot(h.n) > 0.0 { shape.exterior } else { shape.interior };
-        }
+        medium = shape.medium_towards(d, h.n, medium);
         after_surface = true;
         events += 1;
         if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
@@ -265,7 +265,13 @@ fn trace_one(scene: &Scene, s: &mut Sampler, inv_paths: f32, settings: &LightTra
 }
 
 /// Russian roulette on the relative throughput `t / mean(r)` once `events > rr_events`.
-fn survives_roulette(s: &mut Sampler, t: &mut Rgb, r: Rgb, events: u32, settings: &LightTraceSettings) -> bool {
+fn survives_roulette(
+    s: &mut Sampler,
+    t: &mut Rgb,
+    r: Rgb,
+    events: u32,
+    settings: &LightTraceSettings,
+) -> bool {
     if events <= settings.rr_events {
         return true;
     }

@@ -44,9 +44,7 @@ pub fn transmittance_to(
         if !shape.bsdf.is_null() {
             return Rgb::ZERO;
         }
-        if shape.is_medium_transition() {
-            medium = if d.dot(h.n) > 0.0 { shape.exterior } else { shape.interior };
-        }
+        medium = shape.medium_towards(d, h.n, medium);
         origin = offset_origin(h.p, h.n, d);
         if remaining.is_finite() {
             remaining -= (origin - ray.o).length();

@@ -157,9 +157,7 @@ impl Integrator for VolPath {
 
             let shape = &scene.shapes[h.shape as usize];
             if shape.bsdf.is_null() {
-                if shape.is_medium_transition() {
-                    medium = if ray.d.dot(h.n) > 0.0 { shape.exterior } else { shape.interior };
-                }
+                medium = shape.medium_towards(ray.d, h.n, medium);
                 ray = Ray::new(offset_origin(h.p, h.n, ray.d), ray.d);
                 continue;
             }
@@ -169,17 +167,7 @@ impl Integrator for VolPath {
 
             let frame = Frame::from_normal(h.ns);
             let wi = frame.to_local(-ray.d);
-            let medium_towards = |d: glam::Vec3| {
-                if shape.is_medium_transition() {
-                    if d.dot(h.n) > 0.0 {
-                        shape.exterior
-                    } else {
-                        shape.interior
-                    }
-                } else {
-                    medium
-                }
-            };
+            let medium_towards = |d: glam::Vec3| shape.medium_towards(d, h.n, medium);
 
             if !shape.bsdf.is_specular() && depth + 1 < max_depth {
                 if let Some(es) = scene.sample_emitter_direction(h.p, sampler.next_1d(), sampler.next_2d()) {

@@ -52,4 +52,22 @@ impl Shape {
     pub fn is_medium_transition(&self) -> bool {
         self.interior.is_some() || self.exterior.is_some()
     }
+
+    /// Medium a ray enters when it leaves this shape's surface in direction `d` (geometric normal
+    /// `n`): the exterior medium on the side `n` points to, the interior one on the other side,
+    /// or `current` unchanged if the shape declares no media.
+    pub fn medium_towards(
+        &self,
+        d: glam::Vec3,
+        n: glam::Vec3,
+        current: Option<MediumId>,
+    ) -> Option<MediumId> {
+        if !self.is_medium_transition() {
+            current
+        } else if d.dot(n) > 0.0 {
+            self.exterior
+        } else {
+            self.interior
+        }
+    }
 }
