@@ -2,9 +2,13 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use haze_manylight::integrators::{
+    surface_warning, LightBudget, ManyLightSettings, VplIntegrator, VrlIntegrator,
+};
+use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::image_io::RgbImage;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
-use haze_render::{Component, VolPath};
+use haze_render::{Component, Integrator, VolPath};
 use haze_scene::{LoadOptions, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -31,9 +35,19 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores). The image does not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Integrator, overriding the scene's `<integrator>` (volpath, volpathmis).
+    /// Integrator, overriding the scene's `<integrator>`: volpath (volpathmis), vrl, vpl.
     #[arg(long)]
     pub integrator: Option<String>,
+    /// Many-light integrators: trace about this many VRLs per pass (the light-path count is
+    /// fixed from a pilot run). Default: 10000.
+    #[arg(long, conflicts_with = "light_paths")]
+    pub vrls: Option<u64>,
+    /// Many-light integrators: trace exactly this many light paths per pass.
+    #[arg(long)]
+    pub light_paths: Option<u64>,
+    /// vpl: clamp the geometry term 1/w^2 at this value (biased; off by default).
+    #[arg(long)]
+    pub vpl_clamp: Option<f32>,
     /// Override a scene `<default>` parameter: -D name=value (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
@@ -122,6 +136,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         spp_per_pass: args.spp_per_pass,
         components: args.components,
+        first_pass: 0,
     };
     let cancel = install_interrupt_handler();
     let cam = &scene.camera;
@@ -135,22 +150,60 @@ pub fn run(args: RenderArgs) -> Result<()> {
             None => bar.set_position(r.spp_done),
         }
     };
-    let output = match name.as_str() {
+    let many_light = || -> Result<ManyLightSettings> {
+        let budget = match (args.vrls, args.light_paths) {
+            (Some(0), _) => bail!("--vrls must be at least 1"),
+            (_, Some(0)) => bail!("--light-paths must be at least 1"),
+            (_, Some(n)) => LightBudget::Paths(n),
+            (Some(n), None) => LightBudget::Vrls(n),
+            (None, None) => LightBudget::Vrls(10_000),
+        };
+        if let Some(c) = args.vpl_clamp {
+            if !(c.is_finite() && c > 0.0) {
+                bail!("--vpl-clamp must be a positive number, got {c}");
+            }
+        }
+        Ok(ManyLightSettings {
+            budget,
+            trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+        })
+    };
+    let (output, summary) = match name.as_str() {
         "volpath" | "volpathmis" => {
-            render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass)
+            (render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass), None)
         }
         "path" if scene.media.is_empty() => {
-            render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass)
+            (render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass), None)
         }
         "path" => bail!(
             "integrator 'path' ignores participating media in Mitsuba 3; this scene has media: use volpath"
         ),
-        "vrl" | "vpl" | "vrl_lightcuts" | "vpl_lightcuts" => {
-            bail!("integrator '{name}' is not implemented yet (virtual lights land in a later release); use volpath")
+        "vrl" | "vpl" => {
+            if let Some(w) = surface_warning(&scene) {
+                eprintln!("warning: {w}");
+            }
+            let ml = many_light()?;
+            let context = || format!("{}", args.scene.display());
+            if name == "vrl" {
+                let integrator = VrlIntegrator::new(&scene, ml, args.seed).with_context(context)?;
+                let out = render(&scene, &integrator, &settings, &cancel, on_pass);
+                (out, integrator.summary())
+            } else {
+                let integrator =
+                    VplIntegrator::new(&scene, ml, args.seed, args.vpl_clamp).with_context(context)?;
+                let out = render(&scene, &integrator, &settings, &cancel, on_pass);
+                (out, integrator.summary())
+            }
         }
-        other => bail!("unknown integrator '{other}' (available: volpath, volpathmis)"),
+        "vrl_lightcuts" | "vpl_lightcuts" => {
+            bail!("integrator '{name}' is not implemented yet (lightcuts land in a later release); use vrl or vpl")
+        }
+        other => bail!("unknown integrator '{other}' (available: volpath, volpathmis, vrl, vpl)"),
     };
     bar.finish_and_clear();
+    if let Some(s) = summary {
+        eprintln!("{s}");
+    }
     report_and_write(&args, &scene, &name, &output)
 }
 

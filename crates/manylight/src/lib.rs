@@ -5,6 +5,9 @@
 //! - [`vpl`]: virtual point lights — equiangular sampling towards a VPL and its estimator.
 //! - [`lighttrace`]: light tracing that turns light-path segments into VRLs and vertices into VPLs.
 
+pub mod camera;
+pub mod integrators;
 pub mod lighttrace;
+pub mod single;
 pub mod vpl;
 pub mod vrl;

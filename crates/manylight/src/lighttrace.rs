@@ -142,7 +142,7 @@ pub fn trace_light_paths(
 }
 
 /// Separates light-path random streams from camera-path streams with the same seed.
-const LIGHT_STREAM: u64 = 0x5eed_11c7_a11_7e5;
+const LIGHT_STREAM: u64 = 0x005e_ed11_c7a1_17e5;
 
 /// Number of light paths that yields about `target` VRLs, from a pilot of `pilot` paths traced
 /// with a stream of its own. Fixing the path count in advance (rather than stopping once

@@ -107,3 +107,40 @@ impl Film {
             .collect()
     }
 }
+
+impl Film {
+    /// Adds the samples of `other` (same size and layers), e.g. a render of other passes.
+    pub fn merge(&mut self, other: &Film) {
+        assert!(self.width == other.width && self.height == other.height && self.layers == other.layers);
+        for (a, b) in self.data.iter_mut().zip(&other.data) {
+            *a += *b;
+        }
+        self.samples += other.samples;
+    }
+
+    /// Mean over all pixels of the full image (`None`) or a component, per channel.
+    pub fn image_mean(&self, comp: Option<Component>) -> [f64; 3] {
+        let m = self.mean(comp);
+        let n = (m.len() / 3).max(1) as f64;
+        let mut out = [0.0; 3];
+        for px in m.chunks(3) {
+            for c in 0..3 {
+                out[c] += px[c] as f64 / n;
+            }
+        }
+        out
+    }
+
+    /// Multiplies every accumulated sample by `s` (tests of normalisation use it to fake an error).
+    pub fn scale(&mut self, s: f64) {
+        let stride = self.stride();
+        for px in self.data.chunks_mut(stride) {
+            for layer in px.chunks_mut(6) {
+                for c in 0..3 {
+                    layer[c] *= s;
+                    layer[3 + c] *= s * s;
+                }
+            }
+        }
+    }
+}

@@ -26,11 +26,21 @@ pub struct RenderSettings {
     pub spp_per_pass: u32,
     /// Keep the component split (emitted, single, multiple, surface).
     pub components: bool,
+    /// Index of the first pass. Passes are independent and keyed by their index, so renders of
+    /// disjoint pass ranges (other processes, other machines) merge exactly with `Film::merge`.
+    pub first_pass: u32,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        RenderSettings { spp: 16, time_limit: None, seed: 0, spp_per_pass: 1, components: false }
+        RenderSettings {
+            spp: 16,
+            time_limit: None,
+            seed: 0,
+            spp_per_pass: 1,
+            components: false,
+            first_pass: 0,
+        }
     }
 }
 
@@ -87,7 +97,7 @@ pub fn render<I: Integrator>(
         } else {
             spp_per_pass as u64
         };
-        let pass = passes;
+        let pass = settings.first_pass + passes;
         let data = integrator.begin_pass(scene, settings.seed, pass);
         film.data_mut().par_chunks_mut(stride * w).enumerate().for_each(|(y, row)| {
             for (x, slot) in row.chunks_mut(stride).enumerate() {

@@ -195,6 +195,8 @@ impl std::fmt::Display for EmissionError {
     }
 }
 
+impl std::error::Error for EmissionError {}
+
 impl Scene {
     /// Checks that every emitter can start light paths.
     pub fn check_emission(&self) -> Result<(), EmissionError> {
@@ -276,5 +278,15 @@ impl Scene {
             ray = haze_core::Ray::new(haze_core::ray::offset_origin(h.p, h.n, d), d);
         }
         None
+    }
+}
+
+impl Scene {
+    /// A point sampled uniformly by area on the area emitter `emitter` (pdf per unit area in
+    /// the result); `None` for other emitter kinds.
+    pub fn sample_area_emitter_point(&self, emitter: usize, u: Vec2) -> Option<crate::shape::SurfaceSample> {
+        let Emitter::Area { shape, .. } = &self.emitters[emitter] else { return None };
+        let table = self.emitter_tables.area[emitter].as_ref()?;
+        Some(table.sample(&self.shapes[*shape as usize], u))
     }
 }

@@ -26,8 +26,9 @@ pub struct Vpl {
     /// `Phi`: the light path's throughput at the vertex times the emitted power, divided by the
     /// number of light paths, *including* the transmittance up to `p` and `sigma_s` at `p` over
     /// the free-flight pdf, but not the phase function at `p` (the estimator evaluates it
-    /// towards the camera point). For a vertex at distance `v` on a VRL of flux `Phi_vrl`:
-    /// `Phi_vrl T_l(v) sigma_s / p(v)`.
+    /// towards the camera point). For a vertex at distance `v` on an attenuated VRL
+    /// (`ratio = 0`) of flux `Phi_vrl`, reached with free-flight pdf `p(v)`:
+    /// `Phi_vrl T_l(v) sigma_s / p(v)`; with spectral MIS, `lighttrace`'s `beta sigma_s / mean(r)`.
     pub flux: Rgb,
     /// Index of the medium the vertex lies in (the caller's scene index).
     pub medium: u32,
@@ -55,7 +56,7 @@ pub fn sample_vpl_contribution(
     geometry_clamp: Option<f32>,
     connect: impl FnMut(Vec3, Vec3) -> Rgb,
 ) -> Rgb {
-    if !(cam.len > 0.0) || (vpl.flux * cam_medium.sigma_s).is_black() {
+    if cam.len.is_nan() || cam.len <= 0.0 || (vpl.flux * cam_medium.sigma_s).is_black() {
         return Rgb::ZERO;
     }
     let c = cam.d.as_dvec3();

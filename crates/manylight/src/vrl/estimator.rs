@@ -2,17 +2,19 @@
 //! estimated with joint importance sampling: `v` on the VRL `∝ 1/h(v)`, then `u` on the camera
 //! segment equiangularly from `y_v`.
 //!
-//! The contribution of VRL `(y, w_l, t, Phi)` to camera segment `(x, w_c, s)` is
+//! The contribution of VRL `(y, w_l, t)` to camera segment `(x, w_c, s)` is
 //!
 //! ```text
-//! L = Int_0^s Int_0^t  Phi sigma_s_l T_l(v) f_l(w_l -> n) Tr_conn(y_v, x_u) / w^2
+//! L = Int_0^s Int_0^t  Phi(v) sigma_s_l f_l(w_l -> n) Tr_conn(y_v, x_u) / w^2
 //!                      f_c(n -> -w_c) sigma_s_c T_c(u)  dv du
 //! ```
 //!
 //! with `x_u = x + u w_c`, `y_v = y + v w_l`, `w = |x_u - y_v|`, `n = (x_u - y_v) / w`,
-//! `T_l(v) = exp(-sigma_t_l v)`, `T_c(u) = exp(-sigma_t_c u)`, phase functions of propagation
-//! directions (`Phase::eval(d_in, d_out)`) and `Tr_conn` (transmittance times visibility
-//! between the two points) from the caller.
+//! `T_c(u) = exp(-sigma_t_c u)`, phase functions of propagation directions
+//! (`Phase::eval(d_in, d_out)`), `Tr_conn` (transmittance times visibility between the two
+//! points) from the caller, and `Phi(v)` the light at `y_v` ([`Vrl::flux_at`]): `Phi T_l(v)`
+//! with `T_l(v) = exp(-sigma_t_l v)` for a VRL of flux `Phi` at its start, or its
+//! spectral-MIS form for a light-path segment whose end was sampled.
 
 use super::sampling::{Equiangular, VrlPointSampler};
 use super::Segment;
@@ -28,19 +30,57 @@ pub struct VrlMedium {
 }
 
 /// A virtual ray light: one medium segment of a light path.
+///
+/// The light arriving at distance `v` along it is ([`Vrl::flux_at`])
+///
+/// ```text
+/// Phi(v) = flux T_l(v) / mean(ratio T_l(v))      (ratio != 0: a sampled, "short" segment)
+/// Phi(v) = flux T_l(v)                            (ratio == 0: flux given at the start)
+/// ```
+///
+/// with `T_l(v) = exp(-sigma_t_l v)` per channel. It excludes `sigma_s` at `y_v`, which the
+/// estimator multiplies in (`sigma_s_l` of the integral).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vrl {
     pub seg: Segment,
-    /// `Phi`: the light path's throughput times the emitted power, divided by the number of
-    /// light paths, *leaving the segment's start* `seg.o` along `seg.d`. It includes everything
-    /// up to and including the event at the start (emission, or the previous scattering's
-    /// `sigma_s` and phase over their sampling pdfs), and neither the transmittance along this
-    /// segment nor `sigma_s` at the point `y_v` that the estimator picks: those are the
-    /// `T_l(v)` and `sigma_s_l` of the integral. A VPL at distance `v` on this segment, reached
-    /// by free-flight sampling with pdf `p(v)`, has flux `Phi T_l(v) sigma_s_l / p(v)`.
+    /// The light path's throughput times the emitted power, divided by the number of light
+    /// paths, *leaving the segment's start* `seg.o` along `seg.d`: everything up to and
+    /// including the event at the start (emission, or the previous scattering's `sigma_s` and
+    /// phase over their sampling pdfs). With spectral MIS it is divided by the hero channel's
+    /// pdfs only (`beta` of `lighttrace`).
     pub flux: Rgb,
+    /// Spectral-MIS pdf ratios `p_c / p_hero` of the light path up to `seg.o`, for a segment
+    /// whose end was sampled by hero-channel free flight, so that its point at `v` exists with
+    /// probability `T_hero(v)` (`haze_core::transmittance`): the one-sample MIS weight of that
+    /// point is `T_l(v) / mean(ratio T_l(v))`. `Rgb::ZERO` (never a real ratio: the hero's own
+    /// is 1) means the segment's length was not sampled and `flux` is simply attenuated,
+    /// `Phi(v) = flux T_l(v)`: the integral of notes §2 as written.
+    pub ratio: Rgb,
     /// Index of the medium the segment lies in (the caller's scene index).
     pub medium: u32,
+}
+
+impl Vrl {
+    /// A VRL whose flux at the start is attenuated by `T_l(v)` (`ratio = 0`).
+    pub const fn attenuated(seg: Segment, flux: Rgb, medium: u32) -> Self {
+        Vrl { seg, flux, ratio: Rgb::ZERO, medium }
+    }
+
+    /// `Phi(v)`, the light arriving at distance `v` (type docs), in the VRL medium of
+    /// extinction `sigma_t`. Zero if every `ratio T_l(v)` underflows.
+    #[inline]
+    pub fn flux_at(&self, sigma_t: Rgb, v: f32) -> Rgb {
+        let t = sigma_t.exp_neg(v);
+        if self.ratio.is_black() {
+            return self.flux * t;
+        }
+        let m = (self.ratio * t).mean();
+        if m > 0.0 {
+            self.flux * t / m
+        } else {
+            Rgb::ZERO
+        }
+    }
 }
 
 /// One sample of the contribution of `vrl` to the camera segment `cam` (module docs), an
@@ -66,7 +106,7 @@ pub fn sample_vrl_contribution(
     u: Vec2,
     connect: impl FnMut(Vec3, Vec3) -> Rgb,
 ) -> Rgb {
-    if !(cam.len > 0.0) || (vrl.flux * vrl_medium.sigma_s * cam_medium.sigma_s).is_black() {
+    if cam.len.is_nan() || cam.len <= 0.0 || (vrl.flux * vrl_medium.sigma_s * cam_medium.sigma_s).is_black() {
         return Rgb::ZERO;
     }
     let Some(on_vrl) = VrlPointSampler::new(cam.o, cam.d, &vrl.seg) else {
@@ -104,7 +144,7 @@ pub fn vrl_integrand(
     terms_without_inverse_square(cam, cam_medium, vrl, vrl_medium, u, v, x, y, connect) / w2 as f32
 }
 
-/// `Phi sigma_s_l T_l(v) f_l Tr_conn f_c sigma_s_c T_c(u)`: the integrand times `w^2`.
+/// `Phi(v) sigma_s_l f_l Tr_conn f_c sigma_s_c T_c(u)`: the integrand times `w^2`.
 #[allow(clippy::too_many_arguments)]
 fn terms_without_inverse_square(
     cam: &Segment,
@@ -119,9 +159,8 @@ fn terms_without_inverse_square(
 ) -> Rgb {
     let n = connection_direction(x - y, cam.d, vrl.seg.d);
     let phases = vrl_medium.phase.eval(vrl.seg.d, n) * cam_medium.phase.eval(n, -cam.d);
-    vrl.flux
+    vrl.flux_at(vrl_medium.sigma_t, v)
         * vrl_medium.sigma_s
-        * vrl_medium.sigma_t.exp_neg(v)
         * connect(y, x)
         * cam_medium.sigma_s
         * cam_medium.sigma_t.exp_neg(u)
@@ -135,4 +174,32 @@ pub(crate) fn connection_direction(r: Vec3, cam_d: Vec3, light_d: Vec3) -> Vec3 
     r.try_normalize().unwrap_or_else(|| {
         cam_d.cross(light_d).try_normalize().unwrap_or_else(|| cam_d.any_orthonormal_vector())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flux_at_follows_both_conventions() {
+        let seg = Segment::new(Vec3::ZERO, Vec3::X, 2.0);
+        let flux = Rgb::new(1.0, 2.0, 3.0);
+        // Attenuated: flux T(v).
+        let a = Vrl::attenuated(seg, flux, 0);
+        let sigma_t = Rgb::new(0.5, 1.0, 2.0);
+        let exp = flux * sigma_t.exp_neg(0.7);
+        assert!((0..3).all(|c| (a.flux_at(sigma_t, 0.7)[c] - exp[c]).abs() < 1e-6));
+        // Short with spectral MIS: grey extinction cancels, leaving flux / mean(ratio).
+        let s = Vrl { ratio: Rgb::new(1.0, 0.5, 1.5), ..a };
+        for v in [0.0, 0.7, 2.0] {
+            let f = s.flux_at(Rgb::splat(1.3), v);
+            assert!((0..3).all(|c| (f[c] - flux[c]).abs() < 1e-5), "{f}");
+        }
+        // Chromatic: flux T / mean(ratio T), and zero once every channel underflows.
+        let f = s.flux_at(sigma_t, 0.7);
+        let t = sigma_t.exp_neg(0.7);
+        let exp = flux * t / (s.ratio * t).mean();
+        assert!((0..3).all(|c| (f[c] - exp[c]).abs() < 1e-5));
+        assert_eq!(s.flux_at(Rgb::splat(1e3), 1e3), Rgb::ZERO);
+    }
 }

@@ -20,6 +20,11 @@ pub trait Integrator: Sync {
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> Self::PassData;
 
+    /// A line of statistics for the user after rendering (e.g. how many lights were made).
+    fn summary(&self) -> Option<String> {
+        None
+    }
+
     /// One sample of the radiance arriving at the camera along `-ray.d`, split by component.
     /// `medium` is the medium the ray starts in.
     fn radiance(

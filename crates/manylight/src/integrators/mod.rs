@@ -1,0 +1,91 @@
+//! The many-light integrators `vrl` and `vpl`: each pass traces its own light paths
+//! ([`crate::lighttrace`]), then every camera ray sums emitted light, single scattering by
+//! next-event estimation ([`crate::single`]) and the contributions of all virtual lights of the
+//! pass (notes §1: `L = emitted + single + sum over virtual lights`, nothing counted twice).
+
+mod vpl;
+mod vrl;
+
+pub use vpl::VplIntegrator;
+pub use vrl::VrlIntegrator;
+
+use crate::camera::{estimator_medium, CameraSegment};
+use crate::lighttrace::{paths_for_vrl_count, LightTraceSettings};
+use crate::vrl::VrlMedium;
+use haze_render::integrators::transmittance_to;
+use haze_scene::lights::EmissionError;
+use haze_scene::{MediumId, Scene};
+use std::cell::RefCell;
+
+/// How many light paths each pass traces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightBudget {
+    /// Exactly this many light paths per pass.
+    Paths(u64),
+    /// About this many VRLs per pass: the path count is fixed once from a pilot run, so the
+    /// estimate stays unbiased (see `paths_for_vrl_count`).
+    Vrls(u64),
+}
+
+/// What the many-light integrators share.
+#[derive(Clone, Debug)]
+pub struct ManyLightSettings {
+    pub budget: LightBudget,
+    pub trace: LightTraceSettings,
+}
+
+/// Resolves the light budget to a number of paths per pass, and checks that every emitter can
+/// start light paths.
+pub(crate) fn paths_per_pass(
+    scene: &Scene,
+    settings: &ManyLightSettings,
+    seed: u64,
+) -> Result<u64, EmissionError> {
+    scene.check_emission()?;
+    match settings.budget {
+        LightBudget::Paths(n) => Ok(n.max(1)),
+        LightBudget::Vrls(n) => paths_for_vrl_count(scene, n, seed, &settings.trace),
+    }
+}
+
+pub(crate) fn media(scene: &Scene) -> Vec<VrlMedium> {
+    (0..scene.media.len() as MediumId).map(|m| estimator_medium(scene, m)).collect()
+}
+
+/// Transmittance and visibility from a virtual-light point `y` (in medium `from`) to a camera
+/// point `x`, crossing null boundaries.
+#[inline]
+pub(crate) fn connect(scene: &Scene, from: MediumId, y: glam::Vec3, x: glam::Vec3) -> haze_core::Rgb {
+    let v = x - y;
+    let dist = v.length();
+    if dist <= 0.0 {
+        return haze_core::Rgb::ZERO;
+    }
+    // The connection ends *at* x, in the medium; `transmittance_to` shortens by a relative 1e-4
+    // so that a surface exactly at x does not count.
+    transmittance_to(scene, y, None, v / dist, dist, Some(from))
+}
+
+thread_local! {
+    /// Per-thread camera-segment buffer: the per-pixel hot loop allocates nothing.
+    pub(crate) static SEGMENTS: RefCell<Vec<CameraSegment>> = RefCell::new(Vec::with_capacity(crate::camera::MAX_SEGMENTS));
+}
+
+/// Warns once per render if the scene has surfaces whose scattered light the many-light
+/// integrators do not estimate yet.
+pub fn surface_warning(scene: &Scene) -> Option<String> {
+    let n = scene
+        .shapes
+        .iter()
+        .filter(|s| {
+            !s.bsdf.is_null() && !s.bsdf.is_black() && !matches!(s.bsdf, haze_scene::Bsdf::Dielectric { .. })
+        })
+        .count();
+    (n > 0).then(|| {
+        format!(
+            "{n} shape(s) have scattering (non-black, non-null) surfaces: the many-light integrators render \
+             light that camera rays see in media and directly, not light that camera rays receive from \
+             surfaces (the `surface` component is only the part carried by VRLs/VPLs after a surface bounce)"
+        )
+    })
+}

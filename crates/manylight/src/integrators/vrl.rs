@@ -1,0 +1,111 @@
+//! `vrl`: brute-force virtual ray lights, every VRL of the pass evaluated for every camera
+//! segment with the joint importance sampling of Novak et al. 2012.
+
+use super::{connect, media, paths_per_pass, ManyLightSettings, SEGMENTS};
+use crate::camera::trace_camera_ray;
+use crate::lighttrace::trace_light_paths;
+use crate::single::single_scattering;
+use crate::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
+use haze_core::{Ray, Sampler};
+use haze_render::{Component, Integrator, PathRadiance};
+use haze_scene::lights::EmissionError;
+use haze_scene::{MediumId, Scene};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+pub struct VrlIntegrator {
+    settings: ManyLightSettings,
+    paths: u64,
+    made: AtomicU64,
+    passes: AtomicU64,
+}
+
+/// The VRLs of one pass, split by component so that the hot loop does not branch per light.
+pub struct VrlPass {
+    medium_only: Vec<Vrl>,
+    after_surface: Vec<Vrl>,
+    media: Vec<VrlMedium>,
+}
+
+impl VrlIntegrator {
+    /// Fails if an emitter cannot start light paths (`constant`).
+    pub fn new(scene: &Scene, settings: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
+        let paths = paths_per_pass(scene, &settings, seed)?;
+        Ok(VrlIntegrator { settings, paths, made: AtomicU64::new(0), passes: AtomicU64::new(0) })
+    }
+
+    pub fn paths_per_pass(&self) -> u64 {
+        self.paths
+    }
+}
+
+impl Integrator for VrlIntegrator {
+    type PassData = VrlPass;
+
+    fn name(&self) -> &str {
+        "vrl"
+    }
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> VrlPass {
+        let set = trace_light_paths(scene, self.paths, seed, pass, &self.settings.trace)
+            .expect("emitters were checked when the integrator was made");
+        self.made.fetch_add(set.vrls.len() as u64, Ordering::Relaxed);
+        self.passes.fetch_add(1, Ordering::Relaxed);
+        let (mut medium_only, mut after_surface) = (Vec::new(), Vec::new());
+        for r in &set.vrls {
+            let v =
+                Vrl { seg: Segment::new(r.o, r.d, r.len), flux: r.beta, ratio: r.ratio, medium: r.medium };
+            if r.after_surface {
+                after_surface.push(v);
+            } else {
+                medium_only.push(v);
+            }
+        }
+        VrlPass { medium_only, after_surface, media: media(scene) }
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &VrlPass,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance {
+        SEGMENTS.with_borrow_mut(|segments| {
+            let mut out = PathRadiance::default();
+            let path = trace_camera_ray(scene, ray, medium, segments);
+            out.add(Component::Emitted, path.emitted);
+            for cs in segments.iter() {
+                out.add(Component::Single, single_scattering(scene, cs, sampler));
+                let cam_medium = &pass.media[cs.medium as usize];
+                for (lights, comp) in
+                    [(&pass.medium_only, Component::Multiple), (&pass.after_surface, Component::Surface)]
+                {
+                    let mut sum = haze_core::Rgb::ZERO;
+                    for vrl in lights {
+                        sum += sample_vrl_contribution(
+                            &cs.seg,
+                            cam_medium,
+                            vrl,
+                            &pass.media[vrl.medium as usize],
+                            sampler.next_2d(),
+                            |y, x| connect(scene, vrl.medium, y, x),
+                        );
+                    }
+                    out.add(comp, cs.tr_before * sum);
+                }
+            }
+            out
+        })
+    }
+
+    fn summary(&self) -> Option<String> {
+        let passes = self.passes.load(Ordering::Relaxed).max(1);
+        Some(format!(
+            "vrl: {} light paths and {:.0} VRLs per pass on average ({} passes)",
+            self.paths,
+            self.made.load(Ordering::Relaxed) as f64 / passes as f64,
+            passes
+        ))
+    }
+}

@@ -1,0 +1,159 @@
+//! The `vrl` and `vpl` integrators against `volpath`, component by component, on the shared
+//! validation scenes (rendered small so the test takes seconds), and the normalisation of light
+//! tracing.
+//!
+//! Each many-light pass traces a fresh, independently seeded set of light paths, so the
+//! per-pixel sample variance over passes is an honest variance of the pass estimate (pixels of
+//! one pass are correlated with each other, not across passes). Statistic as in
+//! `haze-render/tests/validation.rs`: per channel-pixel z with pooled variances, at most 1% of
+//! channel-pixels beyond the Sidak threshold, and the image-mean z-score within 5 — where the
+//! variance of a many-light image mean comes from the spread of the per-pass image means,
+//! because all pixels of one pass share its lights and are correlated.
+
+use haze_manylight::integrators::{LightBudget, ManyLightSettings, VplIntegrator, VrlIntegrator};
+use haze_manylight::lighttrace::LightTraceSettings;
+use haze_render::progressive::{render, RenderSettings};
+use haze_render::{Component, Film, Integrator, VolPath};
+use haze_scene::{load_file, LoadOptions, Scene};
+use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+const W: u32 = 24;
+const H: u32 = 18;
+
+fn load_small(name: &str) -> Scene {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("../../../shared/validation/scenes/{name}.xml"));
+    let mut scene = load_file(&p, &LoadOptions::default()).expect("validation scene loads");
+    scene.camera.width = W;
+    scene.camera.height = H;
+    scene
+}
+
+/// A render split into passes: the accumulated film and the image mean of each pass per
+/// component (volpath's pixels are independent, so one pass of many samples per pixel suffices).
+struct Passes {
+    film: Film,
+    pass_means: Vec<[[f64; 3]; 4]>,
+}
+
+fn render_passes<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    passes: u32,
+    spp_per_pass: u32,
+    seed: u64,
+) -> Passes {
+    let mut total: Option<Film> = None;
+    let mut pass_means = Vec::new();
+    for k in 0..passes {
+        let settings = RenderSettings {
+            spp: spp_per_pass,
+            seed,
+            spp_per_pass,
+            components: true,
+            time_limit: None,
+            first_pass: k,
+        };
+        let out = render(scene, integrator, &settings, &AtomicBool::new(false), |_| {});
+        assert_eq!(out.invalid_samples, 0);
+        pass_means.push(Component::ALL.map(|c| out.film.image_mean(Some(c))));
+        match &mut total {
+            Some(t) => t.merge(&out.film),
+            None => total = Some(out.film),
+        }
+    }
+    Passes { film: total.expect("at least one pass"), pass_means }
+}
+
+impl Passes {
+    /// Mean and variance of the mean of the image mean of `comp`, channel-averaged, over passes.
+    fn mean_and_variance(&self, comp: Component) -> (f64, f64) {
+        let xs: Vec<f64> =
+            self.pass_means.iter().map(|m| m[comp as usize].iter().sum::<f64>() / 3.0).collect();
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+        (mean, var / n)
+    }
+}
+
+/// Per-pixel z-test of `a` against `b` and the image-mean z-score from per-pass spreads.
+fn compare(a: &Passes, b: &Passes, comp: Component) -> (ZTestReport, f64) {
+    let (w, h) = (W as usize, H as usize);
+    let var_of = |f: &Film| -> Vec<f32> {
+        pool_variance(&f.sample_variance(Some(comp)), w, h, 3).iter().map(|v| v / f.samples as f32).collect()
+    };
+    let pixels =
+        z_test(&a.film.mean(Some(comp)), &var_of(&a.film), &b.film.mean(Some(comp)), &var_of(&b.film), 0.01);
+    let ((ma, va), (mb, vb)) = (a.mean_and_variance(comp), b.mean_and_variance(comp));
+    let mean_z = if va + vb > 0.0 { (ma - mb) / (va + vb).sqrt() } else { 0.0 };
+    (pixels, mean_z)
+}
+
+fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
+    ManyLightSettings {
+        budget: LightBudget::Paths(paths),
+        trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+    }
+}
+
+fn check_against_volpath(name: &str, paths: u64, passes: u32) {
+    let scene = load_small(name);
+    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
+    let vrl =
+        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
+    let vpl = render_passes(
+        &scene,
+        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
+        passes,
+        1,
+        2,
+    );
+    let mut failures = Vec::new();
+    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+        for comp in [Component::Single, Component::Multiple, Component::Emitted] {
+            let (r, mean_z) = compare(f, &reference, comp);
+            println!("{name} {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
+            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
+                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn foggy_room_components_match_volpath() {
+    check_against_volpath("foggy-room", 150, 96);
+}
+
+#[test]
+fn hg_box_components_match_volpath() {
+    check_against_volpath("hg-box", 150, 96);
+}
+
+/// Doubling the number of light paths per pass leaves the expected image unchanged: the image
+/// means of the two agree within 4 standard errors (the normalisation divides by the paths).
+#[test]
+fn light_path_count_does_not_change_the_expected_image() {
+    let scene = load_small("foggy-room");
+    let a = render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, 60), 3).unwrap(), 256, 1, 3);
+    let mut b =
+        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, 120), 4).unwrap(), 256, 1, 4);
+    let (r, mean_z) = compare(&a, &b, Component::Multiple);
+    println!("60 vs 120 paths per pass: {r}; image-mean z = {mean_z:.2}");
+    assert!(mean_z.abs() < 4.0, "{r}; image-mean z = {mean_z:.2}");
+    // The test must be able to fail: a 10% normalisation error is caught.
+    b.film.scale(0.9);
+    for m in &mut b.pass_means {
+        for c in m.iter_mut() {
+            for v in c.iter_mut() {
+                *v *= 0.9;
+            }
+        }
+    }
+    let (_, mean_z) = compare(&a, &b, Component::Multiple);
+    assert!(mean_z.abs() > 4.0, "a 10% normalisation error went unnoticed: image-mean z = {mean_z:.2}");
+}
