@@ -17,6 +17,8 @@ pub struct VrlIntegrator {
     paths: u64,
     made: AtomicU64,
     passes: AtomicU64,
+    /// Camera segment x VRL evaluations so far (for `haze bench`).
+    evaluations: AtomicU64,
 }
 
 /// The VRLs of one pass, split by component so that the hot loop does not branch per light.
@@ -30,11 +32,22 @@ impl VrlIntegrator {
     /// Fails if an emitter cannot start light paths (`constant`).
     pub fn new(scene: &Scene, settings: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
-        Ok(VrlIntegrator { settings, paths, made: AtomicU64::new(0), passes: AtomicU64::new(0) })
+        Ok(VrlIntegrator {
+            settings,
+            paths,
+            made: AtomicU64::new(0),
+            passes: AtomicU64::new(0),
+            evaluations: AtomicU64::new(0),
+        })
     }
 
     pub fn paths_per_pass(&self) -> u64 {
         self.paths
+    }
+
+    /// Camera segment x VRL evaluations made so far (one evaluation includes its visibility test).
+    pub fn evaluations(&self) -> u64 {
+        self.evaluations.load(Ordering::Relaxed)
     }
 }
 
@@ -75,6 +88,8 @@ impl Integrator for VrlIntegrator {
             let mut out = PathRadiance::default();
             let path = trace_camera_ray(scene, ray, medium, segments);
             out.add(Component::Emitted, path.emitted);
+            let lights = (pass.medium_only.len() + pass.after_surface.len()) as u64;
+            self.evaluations.fetch_add(segments.len() as u64 * lights, Ordering::Relaxed);
             for cs in segments.iter() {
                 out.add(Component::Single, single_scattering(scene, cs, sampler));
                 let cam_medium = &pass.media[cs.medium as usize];
