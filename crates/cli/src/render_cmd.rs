@@ -3,9 +3,12 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use haze_manylight::integrators::{
-    surface_warning, LightBudget, ManyLightSettings, VplIntegrator, VrlIntegrator,
+    surface_warning, Builder, LightBudget, LightKind, LightcutSettings, LightcutsIntegrator,
+    ManyLightSettings, VplIntegrator, VrlIntegrator,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
+use haze_manylight::tree::bound::BoundKind;
+use haze_manylight::tree::cut::CutSettings;
 use haze_render::image_io::RgbImage;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
 use haze_render::{Component, Integrator, VolPath};
@@ -48,6 +51,19 @@ pub struct RenderArgs {
     /// vpl: clamp the geometry term 1/w^2 at this value (biased; off by default).
     #[arg(long)]
     pub vpl_clamp: Option<f32>,
+    /// Lightcuts: refine a cut until every node's bound is at most epsilon times the cut's
+    /// estimate (largest RGB channel of each).
+    #[arg(long, default_value_t = 0.02)]
+    pub epsilon: f32,
+    /// Lightcuts: most nodes in a cut.
+    #[arg(long, default_value_t = 1000)]
+    pub max_cut: u32,
+    /// Lightcuts: cluster bound, `paper` (Vibert et al. 2019) or `conservative`.
+    #[arg(long, default_value = "paper")]
+    pub bound: String,
+    /// Lightcuts: tree builder, `agglomerative` (the paper's 3-step parallel build) or `median`.
+    #[arg(long, default_value = "agglomerative")]
+    pub builder: String,
     /// Override a scene `<default>` parameter: -D name=value (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
@@ -113,6 +129,31 @@ fn install_interrupt_handler() -> Arc<AtomicBool> {
 fn component_path(out: &Path, comp: Component) -> PathBuf {
     let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
     out.with_file_name(format!("{stem}_{}.exr", comp.name()))
+}
+
+pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
+    if !(args.epsilon.is_finite() && args.epsilon >= 0.0) {
+        bail!("--epsilon must be a number >= 0, got {}", args.epsilon);
+    }
+    if args.max_cut == 0 {
+        bail!("--max-cut must be at least 1");
+    }
+    let bound = match args.bound.as_str() {
+        "paper" => BoundKind::Paper,
+        "conservative" => BoundKind::Conservative,
+        other => bail!("--bound must be 'paper' or 'conservative', got '{other}'"),
+    };
+    let builder = match args.builder.as_str() {
+        "agglomerative" => Builder::Agglomerative,
+        "median" => Builder::MedianSplit,
+        other => bail!("--builder must be 'agglomerative' or 'median', got '{other}'"),
+    };
+    Ok(LightcutSettings {
+        cut: CutSettings { epsilon: args.epsilon, max_cut: args.max_cut },
+        bound,
+        builder,
+        ..Default::default()
+    })
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
@@ -196,9 +237,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
             }
         }
         "vrl_lightcuts" | "vpl_lightcuts" => {
-            bail!("integrator '{name}' is not implemented yet (lightcuts land in a later release); use vrl or vpl")
+            if let Some(w) = surface_warning(&scene) {
+                eprintln!("warning: {w}");
+            }
+            let ml = many_light()?;
+            let lc = lightcut_settings(&args)?;
+            let kind = if name == "vrl_lightcuts" { LightKind::Vrl } else { LightKind::Vpl };
+            let integrator = LightcutsIntegrator::new(&scene, kind, ml, lc, args.seed)
+                .with_context(|| format!("{}", args.scene.display()))?;
+            let out = render(&scene, &integrator, &settings, &cancel, on_pass);
+            (out, integrator.summary())
         }
-        other => bail!("unknown integrator '{other}' (available: volpath, volpathmis, vrl, vpl)"),
+        other => bail!(
+            "unknown integrator '{other}' (available: volpath, volpathmis, vrl, vpl, vrl_lightcuts, vpl_lightcuts)"
+        ),
     };
     bar.finish_and_clear();
     if let Some(s) = summary {

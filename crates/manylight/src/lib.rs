@@ -9,5 +9,6 @@ pub mod camera;
 pub mod integrators;
 pub mod lighttrace;
 pub mod single;
+pub mod tree;
 pub mod vpl;
 pub mod vrl;

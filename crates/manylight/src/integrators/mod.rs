@@ -3,9 +3,11 @@
 //! next-event estimation ([`crate::single`]) and the contributions of all virtual lights of the
 //! pass (notes §1: `L = emitted + single + sum over virtual lights`, nothing counted twice).
 
+mod lightcuts;
 mod vpl;
 mod vrl;
 
+pub use lightcuts::{Builder, LightKind, LightcutPass, LightcutSettings, LightcutsIntegrator};
 pub use vpl::VplIntegrator;
 pub use vrl::VrlIntegrator;
 
@@ -88,4 +90,15 @@ pub fn surface_warning(scene: &Scene) -> Option<String> {
              surfaces (the `surface` component is only the part carried by VRLs/VPLs after a surface bounce)"
         )
     })
+}
+
+/// Two uniform numbers for light `light` from a per-camera-segment key: every light gets
+/// random numbers of its own, independent of the order in which lights are evaluated, so a
+/// lightcut that evaluates every leaf reproduces the brute-force sum exactly (up to the order
+/// of floating-point additions).
+#[inline]
+pub(crate) fn light_uniforms(key: u64, light: u32) -> glam::Vec2 {
+    let h = haze_core::rng::mix64(key ^ haze_core::rng::mix64(light as u64 ^ 0x1f3d_5b79_a2c4_e6f1));
+    let scale = 1.0 / (1u32 << 24) as f32;
+    glam::Vec2::new((h >> 40) as f32 * scale, ((h >> 8) & 0xff_ffff) as f32 * scale)
 }

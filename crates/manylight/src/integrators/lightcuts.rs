@@ -1,0 +1,379 @@
+//! `vrl_lightcuts` and `vpl_lightcuts`: the paper's scalable estimators. Each pass traces its
+//! light paths, builds a light tree over the VRLs (or VPLs) with the three-step parallel
+//! builder, and every camera segment sums its lights through a lightcut instead of one by one.
+//! Both share the cut loop (`tree::cut::lightcut`) and differ only in bound and evaluation.
+//!
+//! Component split as in `vrl`/`vpl`: lights that follow a surface bounce live in a tree of
+//! their own, so `multiple` and `surface` stay separate.
+
+use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, SEGMENTS};
+use crate::camera::{trace_camera_ray, CameraSegment};
+use crate::lighttrace::trace_light_paths;
+use crate::single::single_scattering;
+use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
+use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
+use crate::tree::lights::LightSummary;
+use crate::tree::{LightTree, Node};
+use crate::vpl::{sample_vpl_contribution, Vpl};
+use crate::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
+use haze_core::{Ray, Rgb, Sampler};
+use haze_render::{Component, Integrator, PathRadiance};
+use haze_scene::lights::EmissionError;
+use haze_scene::{MediumId, Scene};
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Which tree builder to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Builder {
+    /// The paper's three-step parallel agglomerative build.
+    Agglomerative,
+    /// Top-down median split (baseline).
+    MedianSplit,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct LightcutSettings {
+    pub cut: CutSettings,
+    pub bound: BoundKind,
+    pub theta: ThetaBound,
+    pub builder: Builder,
+    pub build: BuildSettings,
+}
+
+impl Default for LightcutSettings {
+    fn default() -> Self {
+        LightcutSettings {
+            cut: CutSettings::default(),
+            bound: BoundKind::Paper,
+            theta: ThetaBound::Exact,
+            builder: Builder::Agglomerative,
+            build: BuildSettings::default(),
+        }
+    }
+}
+
+/// The two kinds of virtual light the lightcut integrators handle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    Vrl,
+    Vpl,
+}
+
+/// Counters reported after rendering.
+#[derive(Default)]
+struct Stats {
+    lights: AtomicU64,
+    passes: AtomicU64,
+    build_ns: AtomicU64,
+    segments: AtomicU64,
+    cut_total: AtomicU64,
+    cut_max: AtomicU64,
+    hit_max: AtomicU64,
+}
+
+pub struct LightcutsIntegrator {
+    kind: LightKind,
+    ml: ManyLightSettings,
+    pub settings: LightcutSettings,
+    paths: u64,
+    stats: Stats,
+}
+
+/// One tree of lights (medium-only or after a surface bounce).
+pub struct Forest<L> {
+    lights: Vec<L>,
+    tree: LightTree,
+}
+
+pub struct LightcutPass {
+    vrls: [Forest<Vrl>; 2],
+    vpls: [Forest<Vpl>; 2],
+    media: Vec<VrlMedium>,
+    light_factor: Rgb,
+    sigma_t_min: Rgb,
+}
+
+impl LightcutsIntegrator {
+    pub fn new(
+        scene: &Scene,
+        kind: LightKind,
+        ml: ManyLightSettings,
+        settings: LightcutSettings,
+        seed: u64,
+    ) -> Result<Self, EmissionError> {
+        let paths = paths_per_pass(scene, &ml, seed)?;
+        Ok(LightcutsIntegrator { kind, ml, settings, paths, stats: Stats::default() })
+    }
+
+    fn build<L>(&self, lights: Vec<L>, summary: impl Fn(&L) -> LightSummary + Sync, seed: u64) -> Forest<L>
+    where
+        L: Sync,
+    {
+        let summaries: Vec<LightSummary> = {
+            use rayon::prelude::*;
+            lights.par_iter().map(&summary).collect()
+        };
+        let build = BuildSettings { seed, ..self.settings.build };
+        let tree = match self.settings.builder {
+            Builder::Agglomerative => build_agglomerative(&summaries, &build),
+            Builder::MedianSplit => build_median_split(&summaries, seed),
+        };
+        Forest { lights, tree }
+    }
+
+    /// Mean and largest cut size per camera segment, and the fraction of segments that hit
+    /// `max_cut`.
+    pub fn cut_statistics(&self) -> (f64, u64, f64) {
+        let segs = self.stats.segments.load(Ordering::Relaxed).max(1) as f64;
+        (
+            self.stats.cut_total.load(Ordering::Relaxed) as f64 / segs,
+            self.stats.cut_max.load(Ordering::Relaxed),
+            self.stats.hit_max.load(Ordering::Relaxed) as f64 / segs,
+        )
+    }
+
+    /// Seconds spent building trees, summed over passes.
+    pub fn build_seconds(&self) -> f64 {
+        self.stats.build_ns.load(Ordering::Relaxed) as f64 * 1e-9
+    }
+}
+
+thread_local! {
+    static CUT_SCRATCH: RefCell<CutScratch> = RefCell::new(CutScratch::default());
+}
+
+struct VrlOracle<'a> {
+    scene: &'a Scene,
+    cs: &'a CameraSegment,
+    cam_medium: &'a VrlMedium,
+    lights: &'a [Vrl],
+    media: &'a [VrlMedium],
+    bound: BoundContext,
+    key: u64,
+}
+
+impl ClusterOracle for VrlOracle<'_> {
+    fn bound(&self, node: &Node) -> f32 {
+        self.bound.vrl(node)
+    }
+    fn contribution(&mut self, light: u32) -> Rgb {
+        let vrl = &self.lights[light as usize];
+        let scene = self.scene;
+        sample_vrl_contribution(
+            &self.cs.seg,
+            self.cam_medium,
+            vrl,
+            &self.media[vrl.medium as usize],
+            light_uniforms(self.key, light),
+            |y, x| connect(scene, vrl.medium, y, x),
+        )
+    }
+}
+
+struct VplOracle<'a> {
+    scene: &'a Scene,
+    cs: &'a CameraSegment,
+    cam_medium: &'a VrlMedium,
+    lights: &'a [Vpl],
+    media: &'a [VrlMedium],
+    bound: BoundContext,
+    key: u64,
+}
+
+impl ClusterOracle for VplOracle<'_> {
+    fn bound(&self, node: &Node) -> f32 {
+        self.bound.vpl(node)
+    }
+    fn contribution(&mut self, light: u32) -> Rgb {
+        let vpl = &self.lights[light as usize];
+        let scene = self.scene;
+        sample_vpl_contribution(
+            &self.cs.seg,
+            self.cam_medium,
+            vpl,
+            &self.media[vpl.medium as usize].phase,
+            light_uniforms(self.key, light).x,
+            None,
+            |y, x| connect(scene, vpl.medium, y, x),
+        )
+    }
+}
+
+impl Integrator for LightcutsIntegrator {
+    type PassData = LightcutPass;
+
+    fn name(&self) -> &str {
+        match self.kind {
+            LightKind::Vrl => "vrl_lightcuts",
+            LightKind::Vpl => "vpl_lightcuts",
+        }
+    }
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass {
+        let set = trace_light_paths(scene, self.paths, seed, pass, &self.ml.trace)
+            .expect("emitters were checked when the integrator was made");
+        let media = media(scene);
+        let t0 = Instant::now();
+        let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
+        fn empty<L>() -> [Forest<L>; 2] {
+            [
+                Forest { lights: Vec::new(), tree: LightTree::default() },
+                Forest { lights: Vec::new(), tree: LightTree::default() },
+            ]
+        }
+        let (vrls, vpls) = match self.kind {
+            LightKind::Vrl => {
+                let mut split: [Vec<Vrl>; 2] = [Vec::new(), Vec::new()];
+                for r in &set.vrls {
+                    split[r.after_surface as usize].push(Vrl {
+                        seg: Segment::new(r.o, r.d, r.len),
+                        flux: r.beta,
+                        ratio: r.ratio,
+                        medium: r.medium,
+                    });
+                }
+                let [a, b] = split;
+                let s = |v: &Vrl| LightSummary::vrl(v, &media[v.medium as usize]);
+                ([self.build(a, s, tree_seed), self.build(b, s, tree_seed ^ 1)], empty())
+            }
+            LightKind::Vpl => {
+                let mut split: [Vec<Vpl>; 2] = [Vec::new(), Vec::new()];
+                for r in &set.vpls {
+                    split[r.after_surface as usize].push(Vpl {
+                        p: r.p,
+                        d_in: r.d_in,
+                        flux: r.flux,
+                        medium: r.medium,
+                    });
+                }
+                let [a, b] = split;
+                (
+                    empty(),
+                    [
+                        self.build(a, LightSummary::vpl, tree_seed),
+                        self.build(b, LightSummary::vpl, tree_seed ^ 1),
+                    ],
+                )
+            }
+        };
+        self.stats.build_ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        let n = match self.kind {
+            LightKind::Vrl => set.vrls.len(),
+            LightKind::Vpl => set.vpls.len(),
+        };
+        self.stats.lights.fetch_add(n as u64, Ordering::Relaxed);
+        self.stats.passes.fetch_add(1, Ordering::Relaxed);
+        // Bounds on transmittance use the least extinction any connection may see; vacuum
+        // anywhere (a camera or light outside every medium) makes it zero.
+        let vacuum = scene.camera.medium.is_none()
+            || scene
+                .shapes
+                .iter()
+                .any(|s| s.is_medium_transition() && (s.interior.is_none() || s.exterior.is_none()));
+        let sigma_t_min = if vacuum {
+            Rgb::ZERO
+        } else {
+            media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| {
+                Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
+            })
+        };
+        LightcutPass { light_factor: light_factor(&media), vrls, vpls, media, sigma_t_min }
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance {
+        SEGMENTS.with_borrow_mut(|segments| {
+            CUT_SCRATCH.with_borrow_mut(|scratch| {
+                let mut out = PathRadiance::default();
+                let path = trace_camera_ray(scene, ray, medium, segments);
+                out.add(Component::Emitted, path.emitted);
+                for cs in segments.iter() {
+                    out.add(Component::Single, single_scattering(scene, cs, sampler));
+                    let cam_medium = &pass.media[cs.medium as usize];
+                    let bound = BoundContext {
+                        seg: cs.seg,
+                        camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
+                        light_factor: pass.light_factor,
+                        sigma_t_min: pass.sigma_t_min,
+                        kind: self.settings.bound,
+                        theta: self.settings.theta,
+                    };
+                    let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
+                    for (i, comp) in [(0, Component::Multiple), (1, Component::Surface)] {
+                        let (value, stats) = match self.kind {
+                            LightKind::Vrl => {
+                                let f = &pass.vrls[i];
+                                let mut o = VrlOracle {
+                                    scene,
+                                    cs,
+                                    cam_medium,
+                                    lights: &f.lights,
+                                    media: &pass.media,
+                                    bound,
+                                    key,
+                                };
+                                lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
+                            }
+                            LightKind::Vpl => {
+                                let f = &pass.vpls[i];
+                                let mut o = VplOracle {
+                                    scene,
+                                    cs,
+                                    cam_medium,
+                                    lights: &f.lights,
+                                    media: &pass.media,
+                                    bound,
+                                    key,
+                                };
+                                lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
+                            }
+                        };
+                        out.add(comp, cs.tr_before * value);
+                        self.record(&stats);
+                    }
+                }
+                out
+            })
+        })
+    }
+
+    fn summary(&self) -> Option<String> {
+        let passes = self.stats.passes.load(Ordering::Relaxed).max(1);
+        let (mean, max, hit) = self.cut_statistics();
+        Some(format!(
+            "{}: {} light paths and {:.0} lights per pass ({} passes); tree build {:.3} s per pass; cut size mean {:.1}, max {}; {:.2}% of segments hit max-cut {}",
+            self.name(),
+            self.paths,
+            self.stats.lights.load(Ordering::Relaxed) as f64 / passes as f64,
+            passes,
+            self.build_seconds() / passes as f64,
+            mean,
+            max,
+            100.0 * hit,
+            self.settings.cut.max_cut
+        ))
+    }
+}
+
+impl LightcutsIntegrator {
+    fn record(&self, s: &CutStats) {
+        if s.size == 0 {
+            return;
+        }
+        self.stats.segments.fetch_add(1, Ordering::Relaxed);
+        self.stats.cut_total.fetch_add(s.size as u64, Ordering::Relaxed);
+        self.stats.cut_max.fetch_max(s.size as u64, Ordering::Relaxed);
+        if s.hit_max {
+            self.stats.hit_max.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
