@@ -1,7 +1,7 @@
 //! `vpl`: brute-force virtual point lights, every VPL of the pass evaluated for every camera
 //! segment with equiangular sampling of the camera point.
 
-use super::{connect, media, paths_per_pass, ManyLightSettings, SEGMENTS};
+use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, SEGMENTS};
 use crate::camera::trace_camera_ray;
 use crate::lighttrace::trace_light_paths;
 use crate::single::single_scattering;
@@ -78,18 +78,20 @@ impl Integrator for VplIntegrator {
             out.add(Component::Emitted, path.emitted);
             for cs in segments.iter() {
                 out.add(Component::Single, single_scattering(scene, cs, sampler));
+                // Per-light random numbers from one key per segment (see `light_uniforms`).
+                let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
                 let cam_medium = &pass.media[cs.medium as usize];
                 for (lights, comp) in
                     [(&pass.medium_only, Component::Multiple), (&pass.after_surface, Component::Surface)]
                 {
                     let mut sum = Rgb::ZERO;
-                    for vpl in lights {
+                    for (i, vpl) in lights.iter().enumerate() {
                         sum += sample_vpl_contribution(
                             &cs.seg,
                             cam_medium,
                             vpl,
                             &pass.media[vpl.medium as usize].phase,
-                            sampler.next_1d(),
+                            light_uniforms(key, i as u32).x,
                             self.clamp,
                             |y, x| connect(scene, vpl.medium, y, x),
                         );

@@ -1,7 +1,7 @@
 //! `vrl`: brute-force virtual ray lights, every VRL of the pass evaluated for every camera
 //! segment with the joint importance sampling of Novak et al. 2012.
 
-use super::{connect, media, paths_per_pass, ManyLightSettings, SEGMENTS};
+use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, SEGMENTS};
 use crate::camera::trace_camera_ray;
 use crate::lighttrace::trace_light_paths;
 use crate::single::single_scattering;
@@ -92,18 +92,20 @@ impl Integrator for VrlIntegrator {
             self.evaluations.fetch_add(segments.len() as u64 * lights, Ordering::Relaxed);
             for cs in segments.iter() {
                 out.add(Component::Single, single_scattering(scene, cs, sampler));
+                // Per-light random numbers from one key per segment (see `light_uniforms`).
+                let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
                 let cam_medium = &pass.media[cs.medium as usize];
                 for (lights, comp) in
                     [(&pass.medium_only, Component::Multiple), (&pass.after_surface, Component::Surface)]
                 {
                     let mut sum = haze_core::Rgb::ZERO;
-                    for vrl in lights {
+                    for (i, vrl) in lights.iter().enumerate() {
                         sum += sample_vrl_contribution(
                             &cs.seg,
                             cam_medium,
                             vrl,
                             &pass.media[vrl.medium as usize],
-                            sampler.next_2d(),
+                            light_uniforms(key, i as u32),
                             |y, x| connect(scene, vrl.medium, y, x),
                         );
                     }

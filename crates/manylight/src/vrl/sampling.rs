@@ -71,7 +71,6 @@ pub(crate) struct Equiangular {
     pub(crate) h: f64,
     a: f64,
     b: f64,
-    theta_a: f64,
     /// `theta_b - theta_a`: the angle `[a, b]` subtends from the light point, in `(0, pi]`.
     pub(crate) span: f64,
 }
@@ -82,27 +81,26 @@ impl Equiangular {
             return None;
         }
         let h = h.abs().max(EQUIANGULAR_MIN_H_REL as f64 * (b - a));
-        let theta_a = ((a - delta) / h).atan();
         let span = subtended_angle(delta, h, a, b);
-        (span > 0.0).then_some(Equiangular { delta, h, a, b, theta_a, span })
+        (span > 0.0).then_some(Equiangular { delta, h, a, b, span })
     }
 
-    /// `t = delta + h tan(theta_a + u span)` when the foot lies on the segment. When it lies
-    /// outside, both angles are near `+-pi/2` for a distant light point and that form loses
-    /// `t` to cancellation; the same map is then written relative to the segment's end farther
-    /// from the foot: for a foot beyond `b`, `t - a = tan(phi) (h^2 + A^2) / (h + A tan(phi))`
-    /// with `A = delta - a > 0` and `phi = u span <= pi/2` (mirrored for a foot before `a`),
-    /// where every term is positive.
+    /// `t = delta + h tan(theta_a + u span)`, written relative to the segment's end that the
+    /// foot is not before, so that no term cancels and no `atan` is needed: for `delta >= a`,
+    /// with `A = delta - a >= 0`, `tan(theta_a) = -A / h` and `phi = u span`, the tangent
+    /// addition formula gives `t - a = sin(phi) (h^2 + A^2) / (h cos(phi) + A sin(phi))`, and
+    /// with `tau = tan(phi / 2)` (`phi < pi`, so `tau` is finite)
+    /// `t - a = 2 tau (h^2 + A^2) / (h (1 - tau^2) + 2 A tau)`; mirrored from `b` with
+    /// `phi = (1 - u) span` for a foot before `a`. For a foot beyond `b` (`phi <= span <= pi/2`)
+    /// or before `a` every term is positive: a distant light point, where both angles are near
+    /// `+-pi/2`, loses nothing to cancellation. With the foot on the segment the denominator is
+    /// `sqrt(h^2 + A^2) cos(theta_a + phi)`, as ill-conditioned near `theta = pi/2` as the
+    /// `tan` of the direct form and no more.
     pub(crate) fn sample(&self, u: f64) -> f64 {
-        let (h, delta) = (self.h, self.delta);
-        let t = if delta > self.b {
-            let (tp, far) = ((u * self.span).tan(), delta - self.a);
-            self.a + tp * (h * h + far * far) / (h + far * tp)
-        } else if delta < self.a {
-            let (tp, far) = (((1.0 - u) * self.span).tan(), self.b - delta);
-            self.b - tp * (h * h + far * far) / (h + far * tp)
+        let t = if self.delta >= self.a {
+            self.a + tangent_offset(self.h, self.delta - self.a, u * self.span)
         } else {
-            delta + h * (self.theta_a + u * self.span).tan()
+            self.b - tangent_offset(self.h, self.b - self.delta, (1.0 - u) * self.span)
         };
         t.clamp(self.a, self.b)
     }
@@ -119,6 +117,16 @@ impl Equiangular {
     pub(crate) fn invert(&self, t: f64) -> f64 {
         (subtended_angle(self.delta, self.h, self.a, t.clamp(self.a, self.b)) / self.span).clamp(0.0, 1.0)
     }
+}
+
+/// Distance from a segment end `e` to the point that makes angle `phi` in `[0, pi)` with
+/// `e` as seen from a point at distance `h` from the line whose foot is `far >= 0` beyond `e`
+/// ([`Equiangular::sample`]): `2 tau (h^2 + far^2) / (h (1 - tau^2) + 2 far tau)`,
+/// `tau = tan(phi / 2)`.
+#[inline]
+fn tangent_offset(h: f64, far: f64, phi: f64) -> f64 {
+    let tau = (0.5 * phi).tan();
+    2.0 * tau * (h * h + far * far) / (h * (1.0 - tau * tau) + 2.0 * far * tau)
 }
 
 /// Angle that `[a, b]` on a line subtends from a point at distance `h > 0` whose foot is at
@@ -285,8 +293,11 @@ impl VrlPointSampler {
 /// from the closest point (`|x| >> dx`, nearly parallel lines): there both asinh are large and
 /// nearly equal. With `S(x) = sqrt(1 + x^2)` and `x >= 0`,
 /// `(x + dx + S(x + dx)) / (x + S(x)) = 1 + dx (1 + (2x + dx) / (S(x) + S(x + dx))) / (x + S(x))`,
-/// all terms positive; negative `x` follows by symmetry, and an interval across zero has no
-/// cancellation.
+/// all terms positive; negative `x` follows by symmetry. An interval across zero is the sum
+/// `asinh(y) + asinh(z)` (`y = x + dx > 0`, `z = -x > 0`), the log of
+/// `(y + S(y)) (z + S(z)) = 1 + yz + y S(z) + z S(y) + (y^2 + z^2 + y^2 z^2) / (S(y) S(z) + 1)`
+/// (using `S(y) S(z) - 1 = (S(y)^2 S(z)^2 - 1) / (S(y) S(z) + 1)`): one `ln_1p` of positive
+/// terms.
 fn asinh_increase(x: f64, dx: f64) -> f64 {
     let y = x + dx;
     if x >= 0.0 {
@@ -295,20 +306,26 @@ fn asinh_increase(x: f64, dx: f64) -> f64 {
     } else if y <= 0.0 {
         asinh_increase(-y, dx)
     } else {
-        y.asinh() - x.asinh()
+        let z = -x;
+        let (sy, sz) = ((1.0 + y * y).sqrt(), (1.0 + z * z).sqrt());
+        let (y2, z2) = (y * y, z * z);
+        (y * z + y * sz + z * sy + (y2 + z2 + y2 * z2) / (sy * sz + 1.0)).ln_1p()
     }
 }
 
 /// `sinh(asinh(x) + phi) - x` for `phi >= 0` without cancellation: with `S = sqrt(1 + x^2)`,
 /// `x (cosh(phi) - 1) + S sinh(phi)`, written for `x < 0` as
-/// `sinh(phi) / (S + |x|) + |x| (1 - exp(-phi))` (all terms positive).
+/// `sinh(phi) / (S + |x|) + |x| (1 - exp(-phi))` (all terms positive). One `exp_m1`:
+/// with `E = exp(phi) - 1 >= 0`, `sinh(phi) = E (E + 2) / (2 (E + 1))`,
+/// `cosh(phi) - 1 = E^2 / (2 (E + 1))` and `1 - exp(-phi) = E / (E + 1)`.
 fn sinh_increase(x: f64, phi: f64) -> f64 {
     let s = (1.0 + x * x).sqrt();
+    let e = phi.exp_m1();
+    let inv = 1.0 / (e + 1.0);
     if x >= 0.0 {
-        let half = (0.5 * phi).sinh();
-        2.0 * x * half * half + s * phi.sinh()
+        0.5 * e * (x * e + s * (e + 2.0)) * inv
     } else {
-        phi.sinh() / (s - x) - x * -(-phi).exp_m1()
+        e * inv * (0.5 * (e + 2.0) / (s - x) - x)
     }
 }
 
