@@ -27,6 +27,9 @@ pub struct BenchArgs {
     /// vrl: VRLs per pass.
     #[arg(long, default_value_t = 10_000)]
     pub vrls: u64,
+    /// lightcuts: measure cut sizes up to this many VRLs (larger counts: build time only).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub max_cut_vrls: u64,
 }
 
 /// Mitsuba 3.9.1 `llvm_ad_rgb` volpath on the validation scenes on the same 2-core machine
@@ -44,8 +47,117 @@ pub fn run(args: BenchArgs) -> Result<()> {
     match args.integrator.as_str() {
         "volpath" => bench_volpath(&args, &scenes),
         "vrl" => bench_vrl(&args, &scenes),
-        other => anyhow::bail!("haze bench measures volpath or vrl, not '{other}'"),
+        "lightcuts" => bench_lightcuts(&args, &scenes),
+        other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
     }
+}
+
+/// Light-tree build times (3-step agglomerative vs median split, 1 and all threads, for 10k,
+/// 100k and 1M VRLs traced in the scene), mean cut size against the number of VRLs, and the
+/// frame time of `vrl_lightcuts` with 100k VRLs against `vrl` with 10k VRLs at 1 spp.
+fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+    use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
+    use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
+    use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+    use haze_manylight::tree::lights::LightSummary;
+    use haze_manylight::vrl::{Segment, Vrl};
+    for path in scenes {
+        let scene = load_scene(path, &[])?;
+        let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
+        println!("\n### {file}\n");
+        println!("| VRLs | builder | threads | build s | ns per N log2 N | mean cut (eps 0.02, 1 spp) | segments at max-cut |");
+        println!("|---|---|---|---|---|---|---|");
+        for n in [10_000u64, 100_000, 1_000_000] {
+            let paths = paths_for_vrl_count(&scene, n, 0, &trace)?;
+            let set = trace_light_paths(&scene, paths, 0, 0, &trace)?;
+            let media = haze_manylight::integrators::media_of(&scene);
+            let lights: Vec<LightSummary> = set
+                .vrls
+                .iter()
+                .map(|r| {
+                    let v = Vrl {
+                        seg: Segment::new(r.o, r.d, r.len),
+                        flux: r.beta,
+                        ratio: r.ratio,
+                        medium: r.medium,
+                    };
+                    LightSummary::vrl(&v, &media[r.medium as usize])
+                })
+                .collect();
+            let nn = lights.len() as f64;
+            for builder in ["agglomerative", "median"] {
+                for threads in [1usize, rayon::current_num_threads()] {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+                    let t0 = Instant::now();
+                    let tree = pool.install(|| match builder {
+                        "agglomerative" => build_agglomerative(&lights, &BuildSettings::default()),
+                        _ => build_median_split(&lights, 0),
+                    });
+                    let secs = t0.elapsed().as_secs_f64();
+                    assert_eq!(tree.nodes.len(), 2 * lights.len() - 1);
+                    // Cut sizes with this builder (1 spp frame), measured once per builder.
+                    let cut = if threads == 1 && n <= args.max_cut_vrls {
+                        let lc = LightcutSettings {
+                            builder: if builder == "median" {
+                                Builder::MedianSplit
+                            } else {
+                                Builder::Agglomerative
+                            },
+                            ..Default::default()
+                        };
+                        let ml =
+                            ManyLightSettings { budget: LightBudget::Paths(paths), trace: trace.clone() };
+                        let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+                        let settings = RenderSettings { spp: 1, ..Default::default() };
+                        let _ = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+                        let (mean, _, hit) = integ.cut_statistics();
+                        (format!("{mean:.1}"), format!("{:.1}%", 100.0 * hit))
+                    } else {
+                        ("-".into(), "-".into())
+                    };
+                    println!(
+                        "| {} | {builder} | {threads} | {secs:.3} | {:.1} | {} | {} |",
+                        lights.len(),
+                        secs * 1e9 / (nn * nn.log2()),
+                        cut.0,
+                        cut.1
+                    );
+                }
+            }
+        }
+        // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
+        let time_of = |integ: &dyn Fn() -> Result<f64>| integ();
+        let lc_secs = time_of(&|| {
+            let ml = ManyLightSettings { budget: LightBudget::Vrls(100_000), trace: trace.clone() };
+            let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, LightcutSettings::default(), 0)?;
+            let out = render(
+                &scene,
+                &integ,
+                &RenderSettings { spp: 1, ..Default::default() },
+                &AtomicBool::new(false),
+                |_| {},
+            );
+            Ok(out.elapsed.as_secs_f64())
+        })?;
+        let vrl_secs = time_of(&|| {
+            let ml = ManyLightSettings { budget: LightBudget::Vrls(10_000), trace: trace.clone() };
+            let integ = VrlIntegrator::new(&scene, ml, 0)?;
+            let out = render(
+                &scene,
+                &integ,
+                &RenderSettings { spp: 1, ..Default::default() },
+                &AtomicBool::new(false),
+                |_| {},
+            );
+            Ok(out.elapsed.as_secs_f64())
+        })?;
+        println!(
+            "\nframe at 1 spp: vrl_lightcuts (100k VRLs) {lc_secs:.2} s, vrl (10k VRLs) {vrl_secs:.2} s, ratio {:.2}",
+            lc_secs / vrl_secs
+        );
+    }
+    Ok(())
 }
 
 /// VRL evaluations per second: one evaluation is one camera segment x one VRL, with its

@@ -143,8 +143,15 @@ fn conservative_bound_is_never_exceeded() {
             kind,
             theta: ThetaBound::Exact,
         };
-        let (b_cons, b_paper) = (ctx(BoundKind::Conservative).vrl(&root), ctx(BoundKind::Paper).vrl(&root));
+        // Clusters of up to 8 VRLs use the VRLs' own distances (`vrl_in_tree`), which is what the
+        // cut uses for them; both must hold.
+        let (b_cons, b_paper) = (
+            ctx(BoundKind::Conservative).vrl_in_tree(&tree, &root, &vrls),
+            ctx(BoundKind::Paper).vrl_in_tree(&tree, &root, &vrls),
+        );
+        let b_box = ctx(BoundKind::Conservative).vrl(&root);
         assert!(b_cons >= b_paper, "the conservative bound is the larger one");
+        assert!(b_box >= b_cons * (1.0 - 1e-4), "distances to the VRLs are at least those to their box");
         for v in &vrls {
             for _ in 0..500 {
                 let u = Vec2::new(s.next_1d(), s.next_1d());

@@ -147,6 +147,7 @@ thread_local! {
 
 struct VrlOracle<'a> {
     scene: &'a Scene,
+    tree: &'a LightTree,
     cs: &'a CameraSegment,
     cam_medium: &'a VrlMedium,
     lights: &'a [Vrl],
@@ -157,7 +158,7 @@ struct VrlOracle<'a> {
 
 impl ClusterOracle for VrlOracle<'_> {
     fn bound(&self, node: &Node) -> f32 {
-        self.bound.vrl(node)
+        self.bound.vrl_in_tree(self.tree, node, self.lights)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vrl = &self.lights[light as usize];
@@ -175,6 +176,7 @@ impl ClusterOracle for VrlOracle<'_> {
 
 struct VplOracle<'a> {
     scene: &'a Scene,
+    tree: &'a LightTree,
     cs: &'a CameraSegment,
     cam_medium: &'a VrlMedium,
     lights: &'a [Vpl],
@@ -185,7 +187,7 @@ struct VplOracle<'a> {
 
 impl ClusterOracle for VplOracle<'_> {
     fn bound(&self, node: &Node) -> f32 {
-        self.bound.vpl(node)
+        self.bound.vpl_in_tree(self.tree, node, self.lights)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vpl = &self.lights[light as usize];
@@ -314,6 +316,7 @@ impl Integrator for LightcutsIntegrator {
                                 let f = &pass.vrls[i];
                                 let mut o = VrlOracle {
                                     scene,
+                                    tree: &f.tree,
                                     cs,
                                     cam_medium,
                                     lights: &f.lights,
@@ -327,6 +330,7 @@ impl Integrator for LightcutsIntegrator {
                                 let f = &pass.vpls[i];
                                 let mut o = VplOracle {
                                     scene,
+                                    tree: &f.tree,
                                     cs,
                                     cam_medium,
                                     lights: &f.lights,

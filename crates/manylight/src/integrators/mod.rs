@@ -50,6 +50,11 @@ pub(crate) fn paths_per_pass(
     }
 }
 
+/// The scene's media in the form the estimators take, indexed by medium id.
+pub fn media_of(scene: &Scene) -> Vec<VrlMedium> {
+    media(scene)
+}
+
 pub(crate) fn media(scene: &Scene) -> Vec<VrlMedium> {
     (0..scene.media.len() as MediumId).map(|m| estimator_medium(scene, m)).collect()
 }

@@ -181,6 +181,121 @@ pub fn light_factor(media: &[crate::vrl::VrlMedium]) -> Rgb {
     })
 }
 
+/// Clusters with at most this many lights are bounded with the distances to their lights
+/// themselves rather than to their box (our refinement of the paper's bound: a box around a
+/// few VRLs often touches the camera segment although none of the VRLs comes close to it).
+pub const EXACT_DISTANCE_MAX_COUNT: u32 = 8;
+
+impl BoundContext {
+    /// Like [`Self::vrl`], but for a cluster of at most [`EXACT_DISTANCE_MAX_COUNT`] VRLs uses
+    /// the smallest segment-to-segment and segment-to-line distances of its VRLs (still an
+    /// upper bound of every sample: `w >= min_i dist(cam, VRL_i)` and
+    /// `h(v) >= min_i dist(camera line, VRL_i)`).
+    pub fn vrl_in_tree(&self, tree: &super::LightTree, node: &Node, vrls: &[crate::vrl::Vrl]) -> f32 {
+        if node.count > EXACT_DISTANCE_MAX_COUNT {
+            return self.vrl(node);
+        }
+        let (mut h_seg, mut h_line) = (f32::INFINITY, f32::INFINITY);
+        for_each_light(tree, node, |i| {
+            let s = &vrls[i as usize].seg;
+            h_seg = h_seg.min(segment_segment_distance(&self.seg, s));
+            h_line = h_line.min(line_segment_distance(&self.seg, s));
+        });
+        self.finish(node, h_seg, h_line, node.l_max)
+    }
+
+    /// Like [`Self::vpl`] with the VPLs' own distances for small clusters.
+    pub fn vpl_in_tree(&self, tree: &super::LightTree, node: &Node, vpls: &[crate::vpl::Vpl]) -> f32 {
+        if node.count > EXACT_DISTANCE_MAX_COUNT {
+            return self.vpl(node);
+        }
+        let (mut h_seg, mut h_line) = (f32::INFINITY, f32::INFINITY);
+        for_each_light(tree, node, |i| {
+            let p = vpls[i as usize].p;
+            h_seg = h_seg.min(point_segment_distance(&self.seg, p));
+            h_line = h_line.min(point_line_distance(&self.seg, p));
+        });
+        self.finish(node, h_seg, h_line, 1.0)
+    }
+
+    fn finish(&self, node: &Node, h_seg: f32, h_line: f32, length: f32) -> f32 {
+        let h = match self.kind {
+            BoundKind::Paper => h_seg,
+            BoundKind::Conservative => h_line,
+        };
+        if h <= 0.0 {
+            return f32::INFINITY;
+        }
+        (self.common(node, h_seg) * (length / h)).max_component()
+    }
+}
+
+/// Calls `f` with the light index of every leaf below `node`.
+fn for_each_light(tree: &super::LightTree, node: &Node, mut f: impl FnMut(u32)) {
+    let mut stack = [0u32; 64];
+    let mut top = 0;
+    if node.is_leaf() {
+        f(node.rep);
+        return;
+    }
+    stack[top] = node.left;
+    stack[top + 1] = node.right;
+    top += 2;
+    while top > 0 {
+        top -= 1;
+        let n = &tree.nodes[stack[top] as usize];
+        if n.is_leaf() {
+            f(n.rep);
+        } else if top + 2 <= stack.len() {
+            stack[top] = n.left;
+            stack[top + 1] = n.right;
+            top += 2;
+        }
+    }
+}
+
+/// Distance between two segments (closest points by clamped parameters; Ericson 2004,
+/// "Real-Time Collision Detection", 5.1.9), in f64.
+pub fn segment_segment_distance(a: &Segment, b: &Segment) -> f32 {
+    let (p, u, la) = (a.o.as_dvec3(), a.d.as_dvec3(), a.len as f64);
+    let (q, v, lb) = (b.o.as_dvec3(), b.d.as_dvec3(), b.len as f64);
+    let w0 = p - q;
+    let (bb, d, e) = (u.dot(v), u.dot(w0), v.dot(w0));
+    let denom = 1.0 - bb * bb;
+    let mut s = if denom > 1e-12 { ((bb * e - d) / denom).clamp(0.0, la) } else { 0.0 };
+    let mut t = e + s * bb;
+    if t < 0.0 {
+        t = 0.0;
+        s = (-d).clamp(0.0, la);
+    } else if t > lb {
+        t = lb;
+        s = (bb * lb - d).clamp(0.0, la);
+    }
+    (w0 + u * s - v * t).length() as f32
+}
+
+/// Distance from segment `b` to the infinite line through segment `a`.
+pub fn line_segment_distance(a: &Segment, b: &Segment) -> f32 {
+    let (p, u) = (a.o.as_dvec3(), a.d.as_dvec3());
+    let (q, v, lb) = (b.o.as_dvec3(), b.d.as_dvec3(), b.len as f64);
+    let w0 = q - p;
+    let perp0 = w0 - u * w0.dot(u);
+    let perp_d = v - u * v.dot(u);
+    let pp = perp_d.length_squared();
+    let t = if pp > 1e-24 { (-perp0.dot(perp_d) / pp).clamp(0.0, lb) } else { 0.0 };
+    (perp0 + perp_d * t).length() as f32
+}
+
+pub fn point_segment_distance(a: &Segment, x: glam::Vec3) -> f32 {
+    let t = (x - a.o).dot(a.d).clamp(0.0, a.len);
+    (x - a.at(t)).length()
+}
+
+pub fn point_line_distance(a: &Segment, x: glam::Vec3) -> f32 {
+    let w = x - a.o;
+    (w - a.d * w.dot(a.d)).length()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,6 +311,29 @@ mod tests {
                 (p - p.clamp(b.lo, b.hi)).length()
             })
             .fold(f32::INFINITY, f32::min)
+    }
+
+    #[test]
+    fn segment_distances_match_dense_sampling() {
+        let mut s = Sampler::from_seed(5);
+        let mut r = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - 2.0;
+        for _ in 0..300 {
+            let a = Segment::from_points(r(), r());
+            let b = Segment::from_points(r(), r());
+            let n = 600;
+            let mut best = f32::INFINITY;
+            let mut best_line = f32::INFINITY;
+            for i in 0..=n {
+                let y = b.at(b.len * i as f32 / n as f32);
+                best = best.min(point_segment_distance(&a, y));
+                best_line = best_line.min(point_line_distance(&a, y));
+            }
+            let d = segment_segment_distance(&a, &b);
+            assert!(d <= best + 1e-5 && d >= best - 2e-2 * (1.0 + b.len / n as f32 * 10.0), "{d} vs {best}");
+            let dl = line_segment_distance(&a, &b);
+            assert!(dl <= best_line + 1e-5 && dl >= best_line - 2e-2, "{dl} vs {best_line}");
+            assert!(dl <= d + 1e-5);
+        }
     }
 
     #[test]
