@@ -1,7 +1,10 @@
 //! `haze`: render Mitsuba 3 scenes with participating media.
 
 mod bench;
+mod compare;
+mod methods;
 mod render_cmd;
+mod report;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -23,6 +26,10 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// Measure rendering throughput on scenes and print a table.
     Bench(bench::BenchArgs),
+    /// Equal-time comparison of methods against a reference: a table, images, an HTML report.
+    Compare(compare::CompareArgs),
+    /// Render a reference image with volpath for a time budget (for `haze compare`).
+    Reference(compare::ReferenceArgs),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +37,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Compare(args) => compare::run(args),
+        Command::Reference(args) => compare::reference(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,17 +1,14 @@
 //! `haze render`.
 
+use crate::methods::{Method, MethodOptions};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use haze_manylight::integrators::{
-    surface_warning, Builder, LightBudget, LightKind, LightcutSettings, LightcutsIntegrator,
-    ManyLightSettings, VplIntegrator, VrlIntegrator,
-};
-use haze_manylight::lighttrace::LightTraceSettings;
+use haze_manylight::integrators::{Builder, LightBudget, LightcutSettings};
 use haze_manylight::tree::bound::BoundKind;
 use haze_manylight::tree::cut::CutSettings;
 use haze_render::image_io::RgbImage;
-use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
-use haze_render::{Component, Integrator, VolPath};
+use haze_render::progressive::{PassReport, RenderOutput, RenderSettings};
+use haze_render::Component;
 use haze_scene::{LoadOptions, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -156,6 +153,25 @@ pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
     })
 }
 
+/// The many-light options of `args`, validated (lightcut options only for lightcut methods).
+fn method_options(args: &RenderArgs, name: &str) -> Result<MethodOptions> {
+    let budget = match (args.vrls, args.light_paths) {
+        (Some(0), _) => bail!("--vrls must be at least 1"),
+        (_, Some(0)) => bail!("--light-paths must be at least 1"),
+        (_, Some(n)) => LightBudget::Paths(n),
+        (Some(n), None) => LightBudget::Vrls(n),
+        (None, None) => LightBudget::Vrls(10_000),
+    };
+    if let Some(c) = args.vpl_clamp {
+        if !(c.is_finite() && c > 0.0) {
+            bail!("--vpl-clamp must be a positive number, got {c}");
+        }
+    }
+    let lightcuts =
+        if name.ends_with("_lightcuts") { lightcut_settings(args)? } else { LightcutSettings::default() };
+    Ok(MethodOptions { budget, vpl_clamp: args.vpl_clamp, lightcuts })
+}
+
 pub fn run(args: RenderArgs) -> Result<()> {
     set_threads(args.threads)?;
     if let Some(t) = args.time {
@@ -191,67 +207,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
             None => bar.set_position(r.spp_done),
         }
     };
-    let many_light = || -> Result<ManyLightSettings> {
-        let budget = match (args.vrls, args.light_paths) {
-            (Some(0), _) => bail!("--vrls must be at least 1"),
-            (_, Some(0)) => bail!("--light-paths must be at least 1"),
-            (_, Some(n)) => LightBudget::Paths(n),
-            (Some(n), None) => LightBudget::Vrls(n),
-            (None, None) => LightBudget::Vrls(10_000),
-        };
-        if let Some(c) = args.vpl_clamp {
-            if !(c.is_finite() && c > 0.0) {
-                bail!("--vpl-clamp must be a positive number, got {c}");
-            }
-        }
-        Ok(ManyLightSettings {
-            budget,
-            trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
-        })
-    };
-    let (output, summary) = match name.as_str() {
-        "volpath" | "volpathmis" => {
-            (render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass), None)
-        }
-        "path" if scene.media.is_empty() => {
-            (render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &cancel, on_pass), None)
-        }
-        "path" => bail!(
-            "integrator 'path' ignores participating media in Mitsuba 3; this scene has media: use volpath"
-        ),
-        "vrl" | "vpl" => {
-            if let Some(w) = surface_warning(&scene) {
-                eprintln!("warning: {w}");
-            }
-            let ml = many_light()?;
-            let context = || format!("{}", args.scene.display());
-            if name == "vrl" {
-                let integrator = VrlIntegrator::new(&scene, ml, args.seed).with_context(context)?;
-                let out = render(&scene, &integrator, &settings, &cancel, on_pass);
-                (out, integrator.summary())
-            } else {
-                let integrator =
-                    VplIntegrator::new(&scene, ml, args.seed, args.vpl_clamp).with_context(context)?;
-                let out = render(&scene, &integrator, &settings, &cancel, on_pass);
-                (out, integrator.summary())
-            }
-        }
-        "vrl_lightcuts" | "vpl_lightcuts" => {
-            if let Some(w) = surface_warning(&scene) {
-                eprintln!("warning: {w}");
-            }
-            let ml = many_light()?;
-            let lc = lightcut_settings(&args)?;
-            let kind = if name == "vrl_lightcuts" { LightKind::Vrl } else { LightKind::Vpl };
-            let integrator = LightcutsIntegrator::new(&scene, kind, ml, lc, args.seed)
-                .with_context(|| format!("{}", args.scene.display()))?;
-            let out = render(&scene, &integrator, &settings, &cancel, on_pass);
-            (out, integrator.summary())
-        }
-        other => bail!(
-            "unknown integrator '{other}' (available: volpath, volpathmis, vrl, vpl, vrl_lightcuts, vpl_lightcuts)"
-        ),
-    };
+    let options = method_options(&args, &name)?;
+    let method = Method::build(&scene, &name, &options, args.seed)
+        .with_context(|| format!("{}", args.scene.display()))?;
+    let output = method.render(&scene, &settings, &cancel, on_pass);
+    let summary = method.summary();
     bar.finish_and_clear();
     if let Some(s) = summary {
         eprintln!("{s}");

@@ -9,6 +9,7 @@
 //! - Every pdf states its measure: per unit length (distances), per steradian (directions) or
 //!   per unit area (points on surfaces).
 
+pub mod color;
 pub mod frame;
 pub mod phase;
 pub mod ray;

@@ -55,7 +55,7 @@ pub fn trace_camera_ray(
             tr *= transmittance(scene.medium(m).sigma_t, len);
         }
         let Some(h) = hit else {
-            let env = scene.environment_radiance();
+            let env = scene.environment_radiance(ray.d);
             return CameraPath { emitted: tr * env, hit_scattering_surface: false };
         };
         let emitted = scene.area_radiance(h.shape, h.n, -ray.d).map_or(Rgb::ZERO, |(_, le)| tr * le);

@@ -250,7 +250,9 @@ fn trace_one(
             return;
         }
         let frame = haze_core::Frame::from_normal(h.ns);
-        let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d()) else { return };
+        let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
+            return;
+        };
         // Adjoint transport: undo the radiance-only 1/eta^2 factor of refraction.
         t *= bs.weight * (bs.eta * bs.eta);
         let d = frame.to_world(bs.wo);

@@ -103,7 +103,7 @@ impl LightPoint {
                     kind: LightKind::Area { weighted_radiance: *radiance / s.pdf, n: s.n },
                 })
             }
-            Emitter::Constant { .. } => None,
+            Emitter::Constant { .. } | Emitter::EnvMap(_) => None,
         }
     }
 

@@ -9,6 +9,7 @@ pub mod components;
 pub mod film;
 pub mod image_io;
 pub mod integrators;
+pub mod metrics;
 pub mod progressive;
 
 pub use components::{Component, PathRadiance};

@@ -8,7 +8,6 @@
 use crate::components::PathRadiance;
 use crate::film::Film;
 use crate::integrators::Integrator;
-use glam::Vec2;
 use haze_core::Sampler;
 use haze_scene::Scene;
 use rayon::prelude::*;
@@ -104,7 +103,8 @@ pub fn render<I: Integrator>(
                 let pixel = (y * w + x) as u64;
                 let mut sampler = Sampler::new(settings.seed, pixel, pass as u64);
                 for _ in 0..n_this {
-                    let pos = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                    // The reconstruction filter by importance sampling (see `PixelFilter`).
+                    let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
                     let ray = cam.generate_ray(pos);
                     let mut r = integrator.radiance(scene, &data, ray, cam.medium, &mut sampler);
                     if !r.total().is_finite() {

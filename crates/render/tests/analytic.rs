@@ -8,6 +8,7 @@ use haze_scene::{Bsdf, Camera, Emitter, Geometry, IntegratorSpec, Medium, Scene,
 
 fn camera(medium: Option<u32>) -> Camera {
     Camera {
+        filter: haze_scene::camera::PixelFilter::Box,
         to_world: Mat4::IDENTITY,
         fov_x_deg: 30.0,
         near_clip: 0.0,

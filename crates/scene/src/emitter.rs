@@ -1,7 +1,9 @@
-//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`).
+//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`, `envmap`).
 
+use crate::envmap::EnvMap;
 use glam::{Mat4, Vec3};
 use haze_core::Rgb;
+use std::sync::Arc;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Emitter {
@@ -15,6 +17,8 @@ pub enum Emitter {
     Area { shape: u32, radiance: Rgb },
     /// Uniform environment radiance from every direction at infinity.
     Constant { radiance: Rgb },
+    /// Radiance at infinity from a latitude-longitude image (see [`EnvMap`]).
+    EnvMap(Arc<EnvMap>),
 }
 
 impl Emitter {
@@ -32,6 +36,21 @@ impl Emitter {
 }
 
 impl Emitter {
+    /// True for emitters at infinity (`constant`, `envmap`).
+    pub fn is_environment(&self) -> bool {
+        matches!(self, Emitter::Constant { .. } | Emitter::EnvMap(_))
+    }
+
+    /// Radiance of an environment emitter arriving from the unit direction `d` (the direction
+    /// of a ray escaping to infinity); zero for other emitters.
+    pub fn environment_radiance(&self, d: Vec3) -> Rgb {
+        match self {
+            Emitter::Constant { radiance } => *radiance,
+            Emitter::EnvMap(map) => map.eval(d),
+            _ => Rgb::ZERO,
+        }
+    }
+
     /// The shape of an area emitter.
     pub fn area_shape(&self) -> Option<u32> {
         match self {

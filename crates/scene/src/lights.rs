@@ -119,6 +119,14 @@ impl Scene {
                 is_delta: false,
                 emitter: idx as u32,
             }),
+            Emitter::EnvMap(map) => map.sample(u).map(|s| EmitterSample {
+                wi: s.d,
+                dist: f32::INFINITY,
+                radiance: s.radiance,
+                pdf: sel * s.pdf,
+                is_delta: false,
+                emitter: idx as u32,
+            }),
         }
     }
 
@@ -135,20 +143,29 @@ impl Scene {
         d2 / (cos_l * table.area * self.emitters.len() as f32)
     }
 
-    /// Pdf (per steradian) that a `constant` emitter sample picks any given direction.
-    pub fn environment_pdf(&self) -> f32 {
-        uniform_sphere_pdf() / self.emitters.len().max(1) as f32
+    /// Pdf (per steradian, selection included) that [`Self::sample_emitter_direction`]
+    /// returns the unit direction `d` from any environment emitter (`constant`, `envmap`).
+    pub fn environment_pdf(&self, d: Vec3) -> f32 {
+        self.environment_emission(d).map(|(_, pdf)| pdf).sum()
     }
 
-    /// Radiance from `constant` emitters along an escaping ray (sum of all of them).
-    pub fn environment_radiance(&self) -> Rgb {
-        self.emitters
-            .iter()
-            .map(|e| match e {
-                Emitter::Constant { radiance } => *radiance,
-                _ => Rgb::ZERO,
-            })
-            .sum()
+    /// Radiance arriving from infinity along the unit direction `d` of an escaping ray: the
+    /// sum over the environment emitters.
+    pub fn environment_radiance(&self, d: Vec3) -> Rgb {
+        self.environment_emission(d).map(|(le, _)| le).sum()
+    }
+
+    /// For each environment emitter, the radiance from the unit direction `d` and the pdf
+    /// (per steradian, selection included) that next-event estimation samples `d` from that
+    /// emitter. An escaping path MIS-weights each term with its own pdf, matching the weights
+    /// next-event estimation gives the same emitter.
+    pub fn environment_emission(&self, d: Vec3) -> impl Iterator<Item = (Rgb, f32)> + '_ {
+        let sel = 1.0 / self.emitters.len().max(1) as f32;
+        self.emitters.iter().filter_map(move |e| match e {
+            Emitter::Constant { radiance } => Some((*radiance, sel * uniform_sphere_pdf())),
+            Emitter::EnvMap(map) => Some((map.eval(d), sel * map.pdf(d))),
+            _ => None,
+        })
     }
 
     /// Radiance leaving an area-emitting shape at a point with normal `n` in direction `w`
@@ -179,7 +196,8 @@ pub struct EmissionSample {
 #[derive(Clone, Debug, PartialEq)]
 pub enum EmissionError {
     NoEmitters,
-    /// `constant` (environment) emitters have no finite emitting surface to start paths from.
+    /// `constant` and `envmap` (environment) emitters have no finite emitting surface to start
+    /// paths from.
     Environment,
 }
 
@@ -189,7 +207,7 @@ impl std::fmt::Display for EmissionError {
             EmissionError::NoEmitters => write!(f, "the scene has no emitters to trace light from"),
             EmissionError::Environment => write!(
                 f,
-                "light tracing does not support 'constant' (environment) emitters; use volpath for this scene"
+                "light tracing does not support 'constant' or 'envmap' (environment) emitters; use volpath for this scene"
             ),
         }
     }
@@ -203,7 +221,7 @@ impl Scene {
         if self.emitters.is_empty() {
             return Err(EmissionError::NoEmitters);
         }
-        if self.emitters.iter().any(|e| matches!(e, Emitter::Constant { .. })) {
+        if self.emitters.iter().any(Emitter::is_environment) {
             return Err(EmissionError::Environment);
         }
         Ok(())
@@ -257,7 +275,7 @@ impl Scene {
                     emitter: idx as u32,
                 })
             }
-            Emitter::Constant { .. } => None,
+            Emitter::Constant { .. } | Emitter::EnvMap(_) => None,
         }
     }
 

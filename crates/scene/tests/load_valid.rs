@@ -44,7 +44,7 @@ fn hg_box() {
     assert_eq!(cube.bsdf, Bsdf::Null);
     assert_eq!((cube.interior, cube.exterior, cube.emitter), (Some(0), None, None));
     let floor = &s.shapes[1];
-    assert_eq!(floor.bsdf, Bsdf::Diffuse { reflectance: Rgb::ZERO });
+    assert_eq!(floor.bsdf, Bsdf::Diffuse { reflectance: Rgb::ZERO.into() });
     // The floor is the rectangle scaled by 4 and rotated -90 deg about x: y = 0, normal +y.
     let Geometry::Mesh(f) = &floor.geometry else { panic!("rectangle is a mesh") };
     assert!(f.positions.iter().all(|p| p.y.abs() < 1e-5 && p.x.abs() <= 4.0 + 1e-5));
@@ -102,7 +102,7 @@ fn teapot_ply() {
     assert_eq!(m.indices.len(), 2256);
     // First vertex of the file is (1.38137, 0, 2.45469), moved by the translation.
     assert!(close(m.positions[0], Vec3::new(11.38137, 0.0, 2.45469)));
-    assert_eq!(s.shapes[0].bsdf, Bsdf::Diffuse { reflectance: Rgb::splat(0.5) });
+    assert_eq!(s.shapes[0].bsdf, Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() });
 }
 
 #[test]

@@ -53,6 +53,13 @@ impl fmt::Display for ZTestReport {
     }
 }
 
+/// The two-sided z threshold of a level-`alpha` test Sidak-corrected over `tests` tests:
+/// `Phi^-1(1 - alpha_1 / 2)` with `alpha_1 = 1 - (1 - alpha)^(1 / tests)`.
+pub fn sidak_threshold(alpha: f64, tests: usize) -> f64 {
+    let alpha_1 = 1.0 - (1.0 - alpha).powf(1.0 / tests as f64);
+    Normal::standard().inverse_cdf(1.0 - alpha_1 / 2.0)
+}
+
 /// Per-pixel z-test. All slices hold the same number of values (pixels x channels).
 /// `var_mean[i]` is the variance of `mean[i]` as an estimator; `var_ref[i]` the reference's.
 /// A channel-pixel where both variances are zero passes only if the values agree to 1e-6.

@@ -5,8 +5,9 @@ use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, S
 use crate::camera::trace_camera_ray;
 use crate::lighttrace::trace_light_paths;
 use crate::single::single_scattering;
-use crate::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
-use haze_core::{Ray, Sampler};
+use crate::vrl::estimator::{contributes, point_pair_estimate, sample_point_pair, PointPair};
+use crate::vrl::{Segment, Vrl, VrlMedium};
+use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Component, Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
@@ -98,17 +99,7 @@ impl Integrator for VrlIntegrator {
                 for (lights, comp) in
                     [(&pass.medium_only, Component::Multiple), (&pass.after_surface, Component::Surface)]
                 {
-                    let mut sum = haze_core::Rgb::ZERO;
-                    for (i, vrl) in lights.iter().enumerate() {
-                        sum += sample_vrl_contribution(
-                            &cs.seg,
-                            cam_medium,
-                            vrl,
-                            &pass.media[vrl.medium as usize],
-                            light_uniforms(key, i as u32),
-                            |y, x| connect(scene, vrl.medium, y, x),
-                        );
-                    }
+                    let sum = sum_contributions(scene, &cs.seg, cam_medium, lights, &pass.media, key);
                     out.add(comp, cs.tr_before * sum);
                 }
             }
@@ -125,4 +116,39 @@ impl Integrator for VrlIntegrator {
             passes
         ))
     }
+}
+
+/// VRLs sampled back to back before their contributions are evaluated (see
+/// [`sample_point_pair`]).
+const CHUNK: usize = 16;
+
+/// `sum_i sample_vrl_contribution(cam, .., lights[i], .., light_uniforms(key, i), ..)`, the same
+/// values added in the same order, computed a chunk of lights at a time: first the points of
+/// every light of the chunk, then their contributions.
+fn sum_contributions(
+    scene: &Scene,
+    cam: &Segment,
+    cam_medium: &VrlMedium,
+    lights: &[Vrl],
+    media: &[VrlMedium],
+    key: u64,
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    for (c, chunk) in lights.chunks(CHUNK).enumerate() {
+        let mut pairs: [Option<PointPair>; CHUNK] = [None; CHUNK];
+        for (k, vrl) in chunk.iter().enumerate() {
+            if contributes(cam, cam_medium, vrl, &media[vrl.medium as usize]) {
+                pairs[k] = sample_point_pair(cam, &vrl.seg, light_uniforms(key, (c * CHUNK + k) as u32));
+            }
+        }
+        for (vrl, pair) in chunk.iter().zip(&pairs) {
+            if let Some(pair) = pair {
+                let vrl_medium = &media[vrl.medium as usize];
+                sum += point_pair_estimate(cam, cam_medium, vrl, vrl_medium, pair, |y, x| {
+                    connect(scene, vrl.medium, y, x)
+                });
+            }
+        }
+    }
+    sum
 }

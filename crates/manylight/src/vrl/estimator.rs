@@ -70,7 +70,7 @@ impl Vrl {
     /// extinction `sigma_t`. Zero if every `ratio T_l(v)` underflows.
     #[inline]
     pub fn flux_at(&self, sigma_t: Rgb, v: f32) -> Rgb {
-        let t = sigma_t.exp_neg(v);
+        let t = exp_neg(sigma_t, v);
         if self.ratio.is_black() {
             return self.flux * t;
         }
@@ -106,22 +106,66 @@ pub fn sample_vrl_contribution(
     u: Vec2,
     connect: impl FnMut(Vec3, Vec3) -> Rgb,
 ) -> Rgb {
-    if cam.len.is_nan() || cam.len <= 0.0 || (vrl.flux * vrl_medium.sigma_s * cam_medium.sigma_s).is_black() {
+    if !contributes(cam, cam_medium, vrl, vrl_medium) {
         return Rgb::ZERO;
     }
-    let Some(on_vrl) = VrlPointSampler::new(cam.o, cam.d, &vrl.seg) else {
-        return Rgb::ZERO;
-    };
-    let (v, p_v) = on_vrl.sample_f64(u.x as f64);
-    let Some(on_cam) = Equiangular::new(on_vrl.foot(v), on_vrl.h(v), 0.0, cam.len as f64) else {
-        return Rgb::ZERO;
-    };
+    match sample_point_pair(cam, &vrl.seg, u) {
+        Some(pair) => point_pair_estimate(cam, cam_medium, vrl, vrl_medium, &pair, connect),
+        None => Rgb::ZERO,
+    }
+}
+
+/// False when the pair cannot contribute: an empty or invalid camera segment, or no light or no
+/// scattering in some channel of every product (then [`sample_vrl_contribution`] is zero).
+#[inline]
+pub(crate) fn contributes(cam: &Segment, cam_medium: &VrlMedium, vrl: &Vrl, vrl_medium: &VrlMedium) -> bool {
+    !(cam.len.is_nan() || cam.len <= 0.0 || (vrl.flux * vrl_medium.sigma_s * cam_medium.sigma_s).is_black())
+}
+
+/// The two points of one sample of [`sample_vrl_contribution`] (its first stage, which depends
+/// only on the two segments and the uniform numbers): camera distance `u` and point `x`, VRL
+/// distance `v` and point `y`, and `1 / (w^2 p(u, v))`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointPair {
+    pub u: f32,
+    pub v: f32,
+    pub x: Vec3,
+    pub y: Vec3,
+    pub inv_w2_pdf: f32,
+}
+
+/// First stage of [`sample_vrl_contribution`]: `v` from the `1/h` density, then `u`
+/// equiangularly from `y_v`. `None` for a zero-length VRL (the estimate is zero). Split from the
+/// second stage so that the brute-force loop can run the sampling of several VRLs back to back
+/// (their long, independent chains of divisions, roots and transcendentals overlap), with the
+/// same arithmetic, hence the same result, as the one-VRL estimator.
+#[inline(always)]
+pub(crate) fn sample_point_pair(cam: &Segment, vrl: &Segment, u: Vec2) -> Option<PointPair> {
+    let on_vrl = VrlPointSampler::new(cam.o, cam.d, vrl)?;
+    let (v, h, inv_hp) = on_vrl.sample_for_estimator(u.x as f64);
+    let on_cam = Equiangular::new(on_vrl.foot(v), h, 0.0, cam.len as f64)?;
     let t_cam = on_cam.sample(u.y as f64);
-    // 1 / (w^2 p(u|v) p(v)) = Theta / (h p(v)); `on_cam.h` is `h(v)`, floored like the pdf's.
-    let inv_w2_pdf = (on_cam.span / (on_cam.h * p_v)) as f32;
-    let (uc, vl) = ((t_cam as f32).min(cam.len), (v as f32).min(vrl.seg.len));
-    let (x, y) = (cam.at(uc), vrl.seg.at(vl));
-    terms_without_inverse_square(cam, cam_medium, vrl, vrl_medium, uc, vl, x, y, connect) * inv_w2_pdf
+    // 1 / (w^2 p(u|v) p(v)) = Theta / (h_eq p(v)) = Theta (1 / (h p(v))) (h / h_eq), with
+    // `h_eq = on_cam.h` the equiangular distance, `h(v)` floored at `1e-6` of the camera segment.
+    let floored = if on_cam.h > h { h / on_cam.h } else { 1.0 };
+    let inv_w2_pdf = (on_cam.span * inv_hp * floored) as f32;
+    let (uc, vl) = ((t_cam as f32).min(cam.len), (v as f32).min(vrl.len));
+    Some(PointPair { u: uc, v: vl, x: cam.at(uc), y: vrl.at(vl), inv_w2_pdf })
+}
+
+/// Second stage of [`sample_vrl_contribution`]: the estimate `f(u, v) / p(u, v)` at a sampled
+/// [`PointPair`], with the connection's transmittance and visibility from `connect(y, x)`.
+#[inline]
+pub(crate) fn point_pair_estimate(
+    cam: &Segment,
+    cam_medium: &VrlMedium,
+    vrl: &Vrl,
+    vrl_medium: &VrlMedium,
+    pair: &PointPair,
+    connect: impl FnMut(Vec3, Vec3) -> Rgb,
+) -> Rgb {
+    let PointPair { u, v, x, y, inv_w2_pdf } = *pair;
+    terms_without_inverse_square(cam, cam_medium, vrl, vrl_medium, u, v, x, y, connect) * inv_w2_pdf
 }
 
 /// The integrand `f(u, v)` of the contribution (module docs) at camera distance `u` and VRL
@@ -163,8 +207,20 @@ fn terms_without_inverse_square(
         * vrl_medium.sigma_s
         * connect(y, x)
         * cam_medium.sigma_s
-        * cam_medium.sigma_t.exp_neg(u)
+        * exp_neg(cam_medium.sigma_t, u)
         * phases
+}
+
+/// `sigma.exp_neg(d)` (`exp(-sigma d)` per channel) with a single `exp` when the channels are
+/// equal, as they are for grey extinction: the same values for a third of the work.
+#[inline]
+pub(crate) fn exp_neg(sigma: Rgb, d: f32) -> Rgb {
+    let [r, g, b] = sigma.0;
+    if r == g && g == b {
+        Rgb::splat((-r * d).exp())
+    } else {
+        sigma.exp_neg(d)
+    }
 }
 
 /// Unit direction of `r`, the light's propagation from the light point to the camera point.

@@ -10,6 +10,8 @@
 use super::Segment;
 use glam::{DVec3, Vec3};
 
+mod trig;
+
 /// Equiangular sampling floors the distance `h` from the light point to the line at
 /// `EQUIANGULAR_MIN_H_REL * (b - a)`. With `h = 0` (the light point on the segment) the density
 /// would be a Dirac peak; the floor turns it into a Cauchy peak of width `1e-6 (b - a)`. The
@@ -76,6 +78,7 @@ pub(crate) struct Equiangular {
 }
 
 impl Equiangular {
+    #[inline(always)]
     pub(crate) fn new(delta: f64, h: f64, a: f64, b: f64) -> Option<Self> {
         if !(a < b && b - a < f64::INFINITY && delta.is_finite() && h.is_finite()) {
             return None;
@@ -96,6 +99,7 @@ impl Equiangular {
     /// `+-pi/2`, loses nothing to cancellation. With the foot on the segment the denominator is
     /// `sqrt(h^2 + A^2) cos(theta_a + phi)`, as ill-conditioned near `theta = pi/2` as the
     /// `tan` of the direct form and no more.
+    #[inline(always)]
     pub(crate) fn sample(&self, u: f64) -> f64 {
         let t = if self.delta >= self.a {
             self.a + tangent_offset(self.h, self.delta - self.a, u * self.span)
@@ -125,15 +129,17 @@ impl Equiangular {
 /// `tau = tan(phi / 2)`.
 #[inline]
 fn tangent_offset(h: f64, far: f64, phi: f64) -> f64 {
-    let tau = (0.5 * phi).tan();
+    let tau = trig::tan(0.5 * phi);
     2.0 * tau * (h * h + far * far) / (h * (1.0 - tau * tau) + 2.0 * far * tau)
 }
 
 /// Angle that `[a, b]` on a line subtends from a point at distance `h > 0` whose foot is at
-/// `delta`: `tan(theta_b - theta_a) = (b - a) h / (h^2 + (a - delta)(b - delta))`. `atan2` keeps
-/// full relative precision when the segment is far away and the two angles nearly equal.
+/// `delta`: `tan(theta_b - theta_a) = (b - a) h / (h^2 + (a - delta)(b - delta))`. The angle is
+/// taken from the two legs of this tangent directly (`atan2`, [`trig::angle`]), which keeps full
+/// relative precision when the segment is far away and the two angles nearly equal.
+#[inline]
 fn subtended_angle(delta: f64, h: f64, a: f64, b: f64) -> f64 {
-    ((b - a) * h).atan2(h * h + (a - delta) * (b - delta))
+    trig::angle((b - a) * h, h * h + (a - delta) * (b - delta))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -181,18 +187,22 @@ pub struct VrlPointSampler {
 enum Kind {
     Uniform,
     /// `d` floored; `v_c` the VRL parameter closest to the camera line; `x_0 = -v_c sin / d`,
-    /// the asinh argument at the VRL start; `span = A_b - A_a`.
+    /// the asinh argument at the VRL start, and `s_0 = sqrt(1 + x_0^2)`; `span = A_b - A_a`;
+    /// `v_scale = d / sin`, the VRL length per unit of the asinh argument.
     Sinh {
         sin_theta: f64,
         d: f64,
         v_c: f64,
         x_0: f64,
+        s_0: f64,
         span: f64,
+        v_scale: f64,
     },
 }
 
 impl VrlPointSampler {
     /// `None` for a zero-length (or non-finite) VRL.
+    #[inline(always)]
     pub fn new(cam_o: Vec3, cam_d: Vec3, vrl: &Segment) -> Option<Self> {
         let len = vrl.len as f64;
         if !(len > 0.0 && len < f64::INFINITY) {
@@ -203,20 +213,31 @@ impl VrlPointSampler {
         let w0 = (vrl.o - cam_o).as_dvec3();
         let (foot0, cos_theta) = (w0.dot(c), e.dot(c));
         let (perp0, perp_dir) = (w0 - foot0 * c, e - cos_theta * c);
-        let sin_theta = c.cross(e).length();
+        let normal = c.cross(e);
+        let sin2 = normal.length_squared();
+        let sin_theta = sin2.sqrt();
         let kind = if sin_theta < VRL_PARALLEL_SIN as f64 {
             Kind::Uniform
         } else {
-            // Minimise |perp0 + v perp_dir|: |perp_dir| = sin(theta).
-            let v_c = -perp0.dot(perp_dir) / (sin_theta * sin_theta);
-            let d_true = w0.dot(c.cross(e)).abs() / sin_theta;
-            let d = d_true.max(VRL_MIN_D_REL as f64 * len);
-            let x_0 = -v_c * sin_theta / d;
-            let span = asinh_increase(x_0, len * sin_theta / d);
+            // Minimise |perp0 + v perp_dir| (|perp_dir| = sin): v_c = -p / sin^2 with
+            // p = perp0 . perp_dir; d = |w0 . normal| / sin (|normal| = sin). With
+            // `sin_d = sin d`, x_0 = -v_c sin / d = p / sin_d and the asinh argument at the VRL end
+            // is x_0 + len sin^2 / sin_d: the sampling constants need one division, not four.
+            let p = perp0.dot(perp_dir);
+            let sin_d_true = w0.dot(normal).abs();
+            // `d = max(d_true, 1e-6 len)`, compared in squares so that the usual case does not
+            // wait for `sin`.
+            let floor = VRL_MIN_D_REL as f64 * len;
+            let sin_d =
+                if sin_d_true * sin_d_true >= floor * floor * sin2 { sin_d_true } else { floor * sin_theta };
+            let x_0 = p / sin_d;
+            let s_0 = (1.0 + x_0 * x_0).sqrt();
+            let span = asinh_increase(x_0, s_0, len * sin2 / sin_d);
+            let (v_c, d) = (-p / sin2, sin_d / sin_theta);
             if !(span > 0.0 && span.is_finite() && v_c.is_finite()) {
                 return None;
             }
-            Kind::Sinh { sin_theta, d, v_c, x_0, span }
+            Kind::Sinh { sin_theta, d, v_c, x_0, s_0, span, v_scale: d / sin_theta }
         };
         if !(foot0.is_finite() && perp0.is_finite()) {
             return None;
@@ -244,12 +265,31 @@ impl VrlPointSampler {
     }
 
     pub(crate) fn sample_f64(&self, u: f64) -> (f64, f64) {
-        let v = match self.kind {
-            Kind::Uniform => u * self.len,
-            Kind::Sinh { sin_theta, d, x_0, span, .. } => d / sin_theta * sinh_increase(x_0, u * span),
-        }
-        .clamp(0.0, self.len);
+        let v = self.sample_v(u);
         (v, self.pdf_f64(v))
+    }
+
+    #[inline]
+    fn sample_v(&self, u: f64) -> f64 {
+        match self.kind {
+            Kind::Uniform => u * self.len,
+            Kind::Sinh { x_0, s_0, span, v_scale, .. } => v_scale * sinh_increase(x_0, s_0, u * span),
+        }
+        .clamp(0.0, self.len)
+    }
+
+    /// What the VRL estimator needs of a sample: `(v, h(v), 1 / (h(v) p(v)))`, the last without
+    /// evaluating the pdf: `span / sin(theta)` for the `1/h` density (constant along the VRL),
+    /// `len / h(v)` for the uniform one.
+    #[inline]
+    pub(crate) fn sample_for_estimator(&self, u: f64) -> (f64, f64, f64) {
+        let v = self.sample_v(u);
+        let h = self.h(v);
+        let inv_hp = match self.kind {
+            Kind::Uniform => self.len / h,
+            Kind::Sinh { sin_theta, span, .. } => span / sin_theta,
+        };
+        (v, h, inv_hp)
     }
 
     pub(crate) fn pdf_f64(&self, v: f64) -> f64 {
@@ -265,7 +305,9 @@ impl VrlPointSampler {
     pub(crate) fn invert_f64(&self, v: f64) -> f64 {
         match self.kind {
             Kind::Uniform => v / self.len,
-            Kind::Sinh { sin_theta, d, x_0, span, .. } => asinh_increase(x_0, v * sin_theta / d) / span,
+            Kind::Sinh { sin_theta, d, x_0, s_0, span, .. } => {
+                asinh_increase(x_0, s_0, v * sin_theta / d) / span
+            }
         }
         .clamp(0.0, 1.0)
     }
@@ -273,6 +315,7 @@ impl VrlPointSampler {
     /// Distance from `y_v` to the camera line as the pdf sees it: `sqrt(d^2 + t'^2 sin^2)` with
     /// the floored `d` ([`VRL_MIN_D_REL`]); for the uniform case the direct distance, floored at
     /// the same `1e-6 len`.
+    #[inline]
     pub(crate) fn h(&self, v: f64) -> f64 {
         match self.kind {
             Kind::Uniform => (self.perp0 + v * self.perp_dir).length().max(VRL_MIN_D_REL as f64 * self.len),
@@ -284,48 +327,72 @@ impl VrlPointSampler {
     }
 
     /// Camera-line parameter of the foot of the perpendicular from `y_v` (the equiangular `delta`).
+    #[inline]
     pub(crate) fn foot(&self, v: f64) -> f64 {
         self.foot0 + v * self.cos_theta
     }
 }
 
-/// `asinh(x + dx) - asinh(x)` for `dx >= 0` without cancellation. The VRL start can lie far
-/// from the closest point (`|x| >> dx`, nearly parallel lines): there both asinh are large and
-/// nearly equal. With `S(x) = sqrt(1 + x^2)` and `x >= 0`,
+/// `asinh(x + dx) - asinh(x)` for `dx >= 0` without cancellation, given `sx = S(x)`,
+/// `S(x) = sqrt(1 + x^2)`. The VRL start can lie far from the closest point (`|x| >> dx`,
+/// nearly parallel lines): there both asinh are large and nearly equal. For `x >= 0`,
 /// `(x + dx + S(x + dx)) / (x + S(x)) = 1 + dx (1 + (2x + dx) / (S(x) + S(x + dx))) / (x + S(x))`,
-/// all terms positive; negative `x` follows by symmetry. An interval across zero is the sum
-/// `asinh(y) + asinh(z)` (`y = x + dx > 0`, `z = -x > 0`), the log of
+/// all terms positive; an interval below zero is its mirror image. An interval across zero is
+/// the sum `asinh(y) + asinh(z)` (`y = x + dx > 0`, `z = -x > 0`), the log of
 /// `(y + S(y)) (z + S(z)) = 1 + yz + y S(z) + z S(y) + (y^2 + z^2 + y^2 z^2) / (S(y) S(z) + 1)`
-/// (using `S(y) S(z) - 1 = (S(y)^2 S(z)^2 - 1) / (S(y) S(z) + 1)`): one `ln_1p` of positive
-/// terms.
-fn asinh_increase(x: f64, dx: f64) -> f64 {
+/// (using `S(y) S(z) - 1 = (S(y)^2 S(z)^2 - 1) / (S(y) S(z) + 1)`). In each case one
+/// logarithm of `1 + (positive terms)`.
+#[inline]
+fn asinh_increase(x: f64, sx: f64, dx: f64) -> f64 {
     let y = x + dx;
-    if x >= 0.0 {
-        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
-        (dx * (1.0 + (x + y) / (sx + sy)) / (x + sx)).ln_1p()
+    let sy = (1.0 + y * y).sqrt();
+    let z = if x >= 0.0 {
+        dx * ((sx + sy) + (x + y)) / ((sx + sy) * (x + sx))
     } else if y <= 0.0 {
-        asinh_increase(-y, dx)
+        // `asinh(-x) - asinh(-y)` with `0 <= -y`: the case above, mirrored.
+        dx * ((sx + sy) - (x + y)) / ((sx + sy) * (sy - y))
     } else {
-        let z = -x;
-        let (sy, sz) = ((1.0 + y * y).sqrt(), (1.0 + z * z).sqrt());
-        let (y2, z2) = (y * y, z * z);
-        (y * z + y * sz + z * sy + (y2 + z2 + y2 * z2) / (sy * sz + 1.0)).ln_1p()
+        let (x2, y2) = (x * x, y * y);
+        y * sx - x * sy - x * y + (x2 + y2 + x2 * y2) / (sx * sy + 1.0)
+    };
+    ln_1p_positive(z)
+}
+
+/// `ln(1 + z)` for `z >= 0`: `ln_1p` where it matters, below 1; above, `ln(1 + z)` is as
+/// precise (the rounding of `1 + z` costs at most `eps / ln 2` relative) and cheaper.
+#[inline]
+fn ln_1p_positive(z: f64) -> f64 {
+    if z < 1.0 {
+        z.ln_1p()
+    } else {
+        (1.0 + z).ln()
     }
 }
 
-/// `sinh(asinh(x) + phi) - x` for `phi >= 0` without cancellation: with `S = sqrt(1 + x^2)`,
-/// `x (cosh(phi) - 1) + S sinh(phi)`, written for `x < 0` as
-/// `sinh(phi) / (S + |x|) + |x| (1 - exp(-phi))` (all terms positive). One `exp_m1`:
-/// with `E = exp(phi) - 1 >= 0`, `sinh(phi) = E (E + 2) / (2 (E + 1))`,
+/// `sinh(asinh(x) + phi) - x` for `phi >= 0` without cancellation, given `s = sqrt(1 + x^2)`:
+/// `x (cosh(phi) - 1) + s sinh(phi)`, written for `x < 0` as
+/// `sinh(phi) / (s + |x|) + |x| (1 - exp(-phi))` (all terms positive). One exponential: with
+/// `E = exp(phi) - 1 >= 0`, `sinh(phi) = E (E + 2) / (2 (E + 1))`,
 /// `cosh(phi) - 1 = E^2 / (2 (E + 1))` and `1 - exp(-phi) = E / (E + 1)`.
-fn sinh_increase(x: f64, phi: f64) -> f64 {
-    let s = (1.0 + x * x).sqrt();
-    let e = phi.exp_m1();
-    let inv = 1.0 / (e + 1.0);
+#[inline]
+fn sinh_increase(x: f64, s: f64, phi: f64) -> f64 {
+    let e = exp_m1_positive(phi);
     if x >= 0.0 {
-        0.5 * e * (x * e + s * (e + 2.0)) * inv
+        0.5 * e * (x * e + s * (e + 2.0)) / (e + 1.0)
     } else {
-        e * inv * (0.5 * (e + 2.0) / (s - x) - x)
+        // `E / (E + 1) (0.5 (E + 2) / (s + |x|) + |x|)` over one denominator.
+        e * (0.5 * (e + 2.0) - x * (s - x)) / ((e + 1.0) * (s - x))
+    }
+}
+
+/// `exp(phi) - 1` for `phi >= 0`: `exp_m1` below `1/2`; above, `exp(phi) - 1` loses at most a
+/// factor `e^(1/2) / (e^(1/2) - 1) < 2.6` of `exp`'s half-ulp error, and is cheaper.
+#[inline]
+fn exp_m1_positive(phi: f64) -> f64 {
+    if phi < 0.5 {
+        phi.exp_m1()
+    } else {
+        phi.exp() - 1.0
     }
 }
 

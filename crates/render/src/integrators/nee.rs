@@ -3,12 +3,13 @@
 use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::transmittance::transmittance;
-use haze_core::{Ray, Rgb};
+use haze_core::{Frame, Ray, Rgb};
 use haze_scene::{MediumId, Scene};
 
 /// Transmittance from `p` along the unit direction `d` over distance `dist` (infinite for
 /// environment light), starting in `medium`. Null surfaces are crossed (changing medium where
-/// the shape declares media, as Mitsuba 3 does); any other surface blocks. Homogeneous media
+/// the shape declares media, as Mitsuba 3 does), thin dielectrics too, scaled by their
+/// transmittance (Mitsuba's `eval_null_transmission`); any other surface blocks. Homogeneous media
 /// give the exact Beer-Lambert factor, so this is deterministic.
 ///
 /// `n_start` is the geometric normal at `p` when `p` is on a surface (used to offset the origin),
@@ -34,7 +35,7 @@ pub fn transmittance_to(
         let hit = scene.intersect(&ray);
         let seg = hit.map_or(remaining, |h| h.t);
         if let Some(m) = medium {
-            tr *= transmittance(scene.medium(m).sigma_t, seg);
+            tr *= beer_lambert(scene.medium(m).sigma_t, seg);
             if tr.is_black() {
                 return Rgb::ZERO;
             }
@@ -42,7 +43,12 @@ pub fn transmittance_to(
         let Some(h) = hit else { return tr };
         let shape = &scene.shapes[h.shape as usize];
         if !shape.bsdf.is_null() {
-            return Rgb::ZERO;
+            // A thin dielectric passes light with its transmittance; other surfaces block.
+            let wi = Frame::from_normal(h.ns).to_local(-d);
+            tr *= shape.bsdf.null_transmission(wi, h.uv);
+            if tr.is_black() {
+                return Rgb::ZERO;
+            }
         }
         medium = shape.medium_towards(d, h.n, medium);
         origin = offset_origin(h.p, h.n, d);
@@ -55,4 +61,16 @@ pub fn transmittance_to(
     }
     // A ray that keeps hitting null surfaces 256 times is caught in degenerate geometry.
     Rgb::ZERO
+}
+
+/// [`transmittance`] with a single `exp` for grey extinction (equal channels), the common
+/// case: the same values for a third of the work on every shadow and connection ray.
+#[inline]
+fn beer_lambert(sigma_t: Rgb, d: f32) -> Rgb {
+    let [r, g, b] = sigma_t.0;
+    if r == g && g == b && d.is_finite() {
+        Rgb::splat((-r * d).exp())
+    } else {
+        transmittance(sigma_t, d)
+    }
 }

@@ -135,11 +135,12 @@ impl Integrator for VolPath {
             let visible = !(depth == 0 && self.hide_emitters);
 
             let Some(h) = hit else {
-                let env = scene.environment_radiance();
-                if visible && !env.is_black() {
-                    let w =
-                        if count_direct { 1.0 } else { power_heuristic(last_pdf, scene.environment_pdf()) };
-                    out.add(class, beta * env * (w / r.mean()));
+                if visible {
+                    // Each environment emitter is weighted against its own NEE pdf.
+                    for (le, pdf) in scene.environment_emission(ray.d) {
+                        let w = if count_direct { 1.0 } else { power_heuristic(last_pdf, pdf) };
+                        out.add(class, beta * le * (w / r.mean()));
+                    }
                 }
                 break;
             };
@@ -172,7 +173,7 @@ impl Integrator for VolPath {
             if !shape.bsdf.is_specular() && depth + 1 < max_depth {
                 if let Some(es) = scene.sample_emitter_direction(h.p, sampler.next_1d(), sampler.next_2d()) {
                     let wo = frame.to_local(es.wi);
-                    let f = shape.bsdf.eval(wi, wo);
+                    let f = shape.bsdf.eval(wi, wo, h.uv);
                     if !f.is_black() {
                         let tr =
                             transmittance_to(scene, h.p, Some(h.n), es.wi, es.dist, medium_towards(es.wi));
@@ -180,7 +181,7 @@ impl Integrator for VolPath {
                             let w = if es.is_delta {
                                 1.0
                             } else {
-                                power_heuristic(es.pdf, shape.bsdf.pdf(wi, wo))
+                                power_heuristic(es.pdf, shape.bsdf.pdf(wi, wo, h.uv))
                             };
                             out.add(
                                 Component::Surface,
@@ -191,15 +192,19 @@ impl Integrator for VolPath {
                 }
             }
 
-            let Some(bs) = shape.bsdf.sample(wi, sampler.next_1d(), sampler.next_2d()) else { break };
+            let Some(bs) = shape.bsdf.sample(wi, sampler.next_1d(), sampler.next_2d(), h.uv) else { break };
             beta *= bs.weight;
             eta *= bs.eta;
             let d = frame.to_world(bs.wo);
-            depth += 1;
             surface_events += 1;
-            last_p = h.p;
-            last_pdf = bs.pdf;
-            specular_chain = bs.specular;
+            // A null-typed sample (thindielectric transmission) is not a scattering event for
+            // Mitsuba's volpath: no depth, and the MIS state of the last real vertex is kept.
+            if !bs.null {
+                depth += 1;
+                last_p = h.p;
+                last_pdf = bs.pdf;
+                specular_chain = bs.specular;
+            }
             medium = medium_towards(d);
             ray = Ray::new(offset_origin(h.p, h.n, d), d);
         }

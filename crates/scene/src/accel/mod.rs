@@ -110,14 +110,17 @@ impl Accel {
         if let Some(bvh) = &self.bvh {
             let o: Vec3A = ray.o.into();
             let d: Vec3A = ray.d.into();
-            let wt = WatertightRay::new(o, d);
+            // Prepared on the first triangle test: most connection and shadow rays in media
+            // test no triangle at all, only node boxes.
+            let mut wt: Option<WatertightRay> = None;
             let r = BvhRay::new(o, d, 0.0, t_max);
             let mut hit = RayHit::none();
             let found = bvh.ray_traverse(r, &mut hit, |r, i| {
                 let v = &self.tris[i].v;
+                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                 wt.intersect(v[0], v[1], v[2], 1e-7, r.tmax).map_or(f32::INFINITY, |h| h.0)
             });
-            if found {
+            if let (true, Some(wt)) = (found, wt) {
                 let tri = &self.tris[hit.primitive_id as usize];
                 if let Some((t, b1, b2)) = wt.intersect(tri.v[0], tri.v[1], tri.v[2], 0.0, f32::INFINITY) {
                     t_max = t;
@@ -203,10 +206,11 @@ impl Accel {
         if let Some(bvh) = &self.bvh {
             let o: Vec3A = ray.o.into();
             let d: Vec3A = ray.d.into();
-            let wt = WatertightRay::new(o, d);
+            let mut wt: Option<WatertightRay> = None;
             let r = BvhRay::new(o, d, 0.0, ray.t_max);
             let missed = bvh.ray_traverse_miss(r, |r, i| {
                 let v = &self.tris[i].v;
+                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                 wt.intersect(v[0], v[1], v[2], 1e-7, r.tmax).map_or(f32::INFINITY, |h| h.0)
             });
             if !missed {

@@ -1,9 +1,9 @@
-//! BSDF plugins `null`, `diffuse` and `dielectric`, and Mitsuba 3's table of named indices of
-//! refraction.
+//! BSDF plugins `null`, `diffuse`, `dielectric`, `thindielectric`, `roughdielectric`,
+//! `plastic`, `roughplastic` and `twosided`, and Mitsuba 3's table of named indices of refraction.
 
 use super::params::Params;
-use super::LoadError;
-use crate::bsdf::Bsdf;
+use super::{textures, LoadError};
+use crate::bsdf::{Bsdf, Microfacet, MicrofacetType, Plastic, RoughDielectric, RoughPlastic};
 use haze_core::Rgb;
 
 /// Mitsuba 3's named indices of refraction (`int_ior="water"`), at 589 nm, as listed in its
@@ -40,43 +40,114 @@ pub fn ior_by_name(name: &str) -> Option<f32> {
     NAMED_IORS.iter().find(|(n, _)| *n == name).map(|(_, ior)| *ior)
 }
 
-/// Builds a BSDF.
+/// Builds a BSDF (Mitsuba 3 names and defaults).
 /// - `null`: no parameters.
-/// - `diffuse`: `reflectance` (Mitsuba 3 default 0.5), each channel in [0, 1].
-/// - `dielectric`: `int_ior` (default `"bk7"` = 1.5046) and `ext_ior` (`"air"` = 1.000277),
-///   numbers or names from [`NAMED_IORS`]; `eta = int_ior / ext_ior`. Mitsuba's
-///   `specular_reflectance`/`specular_transmittance` scale factors are accepted only at their
-///   default 1, because haze's dielectric has no such factors.
+/// - `diffuse`: `reflectance` (default 0.5), a spectrum or texture in [0, 1].
+/// - `dielectric`, `thindielectric`: `int_ior` (default `"bk7"` = 1.5046) and `ext_ior`
+///   (`"air"` = 1.000277), numbers or names from [`NAMED_IORS`]; `eta = int_ior / ext_ior`.
+/// - `roughdielectric`: the same plus `distribution` (`beckmann` (default) or `ggx`), `alpha`
+///   (0.1, must be > 0) and `sample_visible` (true).
+/// - `plastic`: `diffuse_reflectance` (0.5, spectrum or texture), `int_ior`
+///   (`"polypropylene"` = 1.49), `ext_ior` (`"air"`), `nonlinear` (false).
+/// - `roughplastic`: the same plus `distribution`, `alpha` and `sample_visible` as above.
+/// - `twosided`: one nested or referenced BSDF, used on both sides.
+///
+/// Mitsuba's `specular_reflectance`/`specular_transmittance` scale factors are accepted only at
+/// their default 1, because haze's BSDFs have no such factors.
 pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
     let bsdf = match p.ty() {
         "diffuse" => {
-            let reflectance = p.spectrum("reflectance", Rgb::splat(0.5))?;
-            if reflectance.min_component() < 0.0 || reflectance.max_component() > 1.0 {
-                return Err(p.error_at("reflectance", "'reflectance' must lie in [0, 1] in every channel"));
-            }
-            Bsdf::Diffuse { reflectance }
+            Bsdf::Diffuse { reflectance: textures::texture(p, "reflectance", Rgb::splat(0.5), (0.0, 1.0))? }
         }
-        "dielectric" => {
-            let int_ior = ior(p, "int_ior", "bk7")?;
-            let ext_ior = ior(p, "ext_ior", "air")?;
-            for name in ["specular_reflectance", "specular_transmittance"] {
-                if let Some(v) = p.spectrum_opt(name)? {
-                    if v != Rgb::ONE {
-                        return Err(p.error_at(
-                            name,
-                            format!(
-                                "unsupported: '{name}' other than 1 (haze's dielectric has no scale factors)"
-                            ),
-                        ));
+        "dielectric" | "thindielectric" | "roughdielectric" => {
+            let eta = eta(p, "bk7")?;
+            unit_scale_factors(p, &["specular_reflectance", "specular_transmittance"])?;
+            match p.ty() {
+                "dielectric" => Bsdf::Dielectric { eta },
+                "thindielectric" => Bsdf::ThinDielectric { eta },
+                _ => Bsdf::RoughDielectric(RoughDielectric { distr: microfacet(p)?, eta }),
+            }
+        }
+        "plastic" | "roughplastic" => {
+            let diffuse = textures::texture(p, "diffuse_reflectance", Rgb::splat(0.5), (0.0, 1.0))?;
+            let eta = eta(p, "polypropylene")?;
+            let nonlinear = p.bool("nonlinear", false)?;
+            unit_scale_factors(p, &["specular_reflectance"])?;
+            if p.ty() == "plastic" {
+                Bsdf::Plastic(Plastic::new(diffuse, eta, nonlinear))
+            } else {
+                Bsdf::RoughPlastic(Box::new(RoughPlastic::new(microfacet(p)?, diffuse, eta, nonlinear)))
+            }
+        }
+        "twosided" => {
+            let nested = p.objects(&["bsdf"]);
+            match nested.as_slice() {
+                [o] => {
+                    let inner = build(&p.nested(o.target)?)?;
+                    if matches!(inner, Bsdf::TwoSided(_)) {
+                        return Err(o.site.error("a twosided BSDF cannot wrap another twosided BSDF"));
                     }
+                    Bsdf::TwoSided(Box::new(inner))
+                }
+                [] => return Err(p.element().error("a twosided BSDF needs one nested or referenced <bsdf>")),
+                [_, o, ..] => {
+                    return Err(o.site.error(
+                        "unsupported: a twosided BSDF with a different BSDF on each side (give one <bsdf>)",
+                    ))
                 }
             }
-            Bsdf::Dielectric { eta: int_ior / ext_ior }
         }
         _ => Bsdf::Null,
     };
+    let texture_params: &[&str] = match p.ty() {
+        "diffuse" => &["reflectance"],
+        "plastic" | "roughplastic" => &["diffuse_reflectance"],
+        _ => &[],
+    };
+    textures::reject_other_textures(p, texture_params)?;
     p.finish()?;
     Ok(bsdf)
+}
+
+/// `int_ior / ext_ior`, with the plugin's default `int_ior` and `ext_ior` air.
+fn eta(p: &Params, default_int: &str) -> Result<f32, LoadError> {
+    let int_ior = ior(p, "int_ior", default_int)?;
+    let ext_ior = ior(p, "ext_ior", "air")?;
+    Ok(int_ior / ext_ior)
+}
+
+/// Mitsuba's optional specular scale factors: only the default 1 is supported.
+fn unit_scale_factors(p: &Params, names: &[&str]) -> Result<(), LoadError> {
+    for &name in names {
+        if let Some(v) = p.spectrum_opt(name)? {
+            if v != Rgb::ONE {
+                return Err(p.error_at(
+                    name,
+                    format!("unsupported: '{name}' other than 1 (haze's {} has no scale factors)", p.ty()),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `distribution` (`beckmann` default, `ggx`), `alpha` (0.1, > 0) and `sample_visible` (true).
+fn microfacet(p: &Params) -> Result<Microfacet, LoadError> {
+    let ty = match p.string_opt("distribution")? {
+        None => MicrofacetType::Beckmann,
+        Some(name) => MicrofacetType::from_name(name).ok_or_else(|| {
+            p.error_at(
+                "distribution",
+                format!("unknown microfacet distribution '{name}' (supported: beckmann, ggx)"),
+            )
+        })?,
+    };
+    let alpha = p.float("alpha", 0.1)?;
+    if alpha.is_nan() || alpha <= 0.0 {
+        return Err(p.error_at("alpha", format!("'alpha' must be > 0, got {alpha}")));
+    }
+    let sample_visible = p.bool("sample_visible", true)?;
+    Ok(Microfacet::new(ty, alpha, sample_visible))
 }
 
 /// An index of refraction given as a number (`<float>`) or a material name (`<string>`).

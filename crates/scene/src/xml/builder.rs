@@ -3,7 +3,7 @@
 
 use super::document::{Document, Element};
 use super::params::{Ids, Params, VALUE_TAGS};
-use super::{bsdfs, emitters, integrator, media, plugins, sensor, shapes, LoadError};
+use super::{bsdfs, emitters, integrator, media, plugins, sensor, shapes, textures, LoadError};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::medium::{Medium, MediumId};
@@ -90,7 +90,7 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
                 if p.ty() == "area" {
                     return Err(el.error("an area emitter must be nested inside the <shape> that emits"));
                 }
-                let emitter = emitters::build(&p)?;
+                let emitter = emitters::build(&p, b.doc)?;
                 b.emitters.push(emitter);
             }
             // Defined at the top level to be referenced; built here too, so that their errors
@@ -100,6 +100,9 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             }
             "phase" => {
                 media::phase(&b.params(el)?)?;
+            }
+            "texture" => {
+                textures::build(&b.params(el)?)?;
             }
             "film" | "sampler" | "rfilter" => {
                 return Err(el.error(format!(
@@ -115,9 +118,7 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             tag if VALUE_TAGS.contains(&tag) => {
                 return Err(el.error("a parameter must be inside the plugin element it belongs to"))
             }
-            "texture" | "volume" => {
-                return Err(el.error(format!("unsupported: haze has no <{}> plugins", el.tag)))
-            }
+            "volume" => return Err(el.error(format!("unsupported: haze has no <{}> plugins", el.tag))),
             tag => return Err(el.error(format!("unknown element <{tag}>"))),
         }
     }

@@ -1,10 +1,13 @@
-//! Emitter plugins `point`, `spot`, `constant`, and `area` (inside a shape).
+//! Emitter plugins `point`, `spot`, `constant`, `envmap`, and `area` (inside a shape).
 
+use super::document::Document;
 use super::params::Params;
 use super::LoadError;
 use crate::emitter::Emitter;
+use crate::envmap::EnvMap;
 use glam::{Mat4, Vec3};
 use haze_core::Rgb;
+use std::sync::Arc;
 
 /// Builds a `point`, `spot` or `constant` emitter (an `area` emitter is built by its shape
 /// with [`area_radiance`]). Mitsuba 3 defaults:
@@ -12,10 +15,13 @@ use haze_core::Rgb;
 /// - `spot`: `to_world` (shines down local +z); `intensity` 1; `cutoff_angle` 20 degrees;
 ///   `beam_width` 3/4 of the cutoff; both half-angles in degrees, stored in radians.
 /// - `constant`: `radiance` 1.
+/// - `envmap`: `filename` (required; an OpenEXR or Radiance HDR latitude-longitude image,
+///   found through the `<path>` folders like any file), `scale` 1, `to_world` (identity; a
+///   rotation, without scaling).
 ///
 /// haze emitters take no medium: a `<medium>` or `<ref>` to one inside an emitter is an
 /// "unsupported" error rather than silently ignored.
-pub(super) fn build(p: &Params) -> Result<Emitter, LoadError> {
+pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
     if let Some(m) = p.objects(&["medium"]).first() {
         return Err(m.site.error("unsupported: a medium inside <emitter> (haze emitters take no medium)"));
     }
@@ -57,6 +63,21 @@ pub(super) fn build(p: &Params) -> Result<Emitter, LoadError> {
             }
         }
         "constant" => Emitter::Constant { radiance: non_negative(p, "radiance")? },
+        "envmap" => {
+            let filename =
+                p.string_opt("filename")?.ok_or_else(|| p.element().error("missing parameter 'filename'"))?;
+            let scale = p.float("scale", 1.0)?;
+            if scale < 0.0 {
+                return Err(p.error_at("scale", format!("'scale' must not be negative, got {scale}")));
+            }
+            let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+            if super::transform::uniform_scale(&to_world).is_none_or(|s| (s - 1.0).abs() > 1e-3) {
+                return Err(p.error_at("to_world", "the envmap's to_world must be a rotation (no scaling)"));
+            }
+            let path = doc.resolve(filename, p.element());
+            let map = EnvMap::load(&path, scale, to_world).map_err(|m| p.error_at("filename", m))?;
+            Emitter::EnvMap(Arc::new(map))
+        }
         // Shapes build area emitters; the builder rejects them elsewhere.
         _ => return Err(p.element().error("an area emitter must be nested inside the <shape> that emits")),
     };

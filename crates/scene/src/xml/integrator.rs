@@ -1,5 +1,5 @@
-//! `<integrator>`: Mitsuba 3's `volpath`, `volpathmis` and `path`, and haze's own `vrl`, `vpl`,
-//! `vrl_lightcuts` and `vpl_lightcuts`, with the parameters they share.
+//! `<integrator>`: Mitsuba 3's `volpath`, `volpathmis` and `path`, the `moment` wrapper, and
+//! haze's own `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts`, with the parameters they share.
 
 use super::params::Params;
 use super::LoadError;
@@ -7,7 +7,25 @@ use crate::scene::IntegratorSpec;
 
 /// `max_depth` (Mitsuba 3 default -1 = unlimited; must be >= -1), `rr_depth` (5; must be > 0),
 /// `hide_emitters` (false).
+///
+/// `moment` wraps one nested integrator and, in Mitsuba 3, adds the second moment of its
+/// samples as AOVs; its mean image is the nested integrator's, so haze renders the nested
+/// integrator (the per-pixel variance is available through `--variance-out`). Mitsuba accepts
+/// several nested integrators; haze renders exactly one.
 pub(super) fn build(p: &Params) -> Result<IntegratorSpec, LoadError> {
+    if p.ty() == "moment" {
+        let nested = p.objects(&["integrator"]);
+        let inner = match nested[..] {
+            [one] => one,
+            [] => return Err(p.element().error("'moment' needs one nested <integrator>")),
+            [_, second, ..] => {
+                return Err(second.site.error("haze's 'moment' renders one nested <integrator>, not several"))
+            }
+        };
+        let spec = build(&p.nested(inner.target)?)?;
+        p.finish()?;
+        return Ok(spec);
+    }
     let defaults = IntegratorSpec::default();
     let max_depth = p.int("max_depth", defaults.max_depth)?;
     if max_depth < -1 {

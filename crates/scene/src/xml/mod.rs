@@ -27,6 +27,7 @@ mod plugins;
 mod ply;
 mod sensor;
 mod shapes;
+mod textures;
 mod transform;
 
 pub use bsdfs::{ior_by_name, NAMED_IORS};

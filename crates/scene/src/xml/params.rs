@@ -12,6 +12,7 @@ use super::plugins;
 use super::transform;
 use super::LoadError;
 use glam::{Mat4, Vec3};
+use haze_core::color::{spectrum_to_linear_srgb, SpectrumKind};
 use haze_core::Rgb;
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -184,8 +185,17 @@ impl<'a> Params<'a> {
 
     /// A spectrum-valued parameter: `<rgb>`, a constant `<spectrum>` or, as Mitsuba 3
     /// accepts, a `<float>`/`<integer>` (grey).
+    ///
+    /// A `<spectrum>` of wavelength:value pairs is converted as Mitsuba 3's RGB variants do
+    /// ([`haze_core::color::spectrum_to_linear_srgb`]): as emission inside an `<emitter>`, as
+    /// an unbounded quantity inside a `<medium>`, as a reflectance elsewhere.
     pub fn spectrum_opt(&self, name: &str) -> Result<Option<Rgb>, LoadError> {
-        self.raw(name).map(|el| spectrum_value(el, name)).transpose()
+        let kind = match self.el.tag.as_str() {
+            "emitter" => SpectrumKind::Emission,
+            "medium" => SpectrumKind::Unbounded,
+            _ => SpectrumKind::Reflectance,
+        };
+        self.raw(name).map(|el| spectrum_value(el, name, kind)).transpose()
     }
 
     pub fn spectrum(&self, name: &str, default: Rgb) -> Result<Rgb, LoadError> {
@@ -297,7 +307,7 @@ fn finite(el: &Element, name: &str, x: f32) -> Result<f32, LoadError> {
     }
 }
 
-fn spectrum_value(el: &Element, name: &str) -> Result<Rgb, LoadError> {
+fn spectrum_value(el: &Element, name: &str, kind: SpectrumKind) -> Result<Rgb, LoadError> {
     expect_tag(el, name, &["rgb", "spectrum", "float", "integer"])?;
     let rgb = match el.tag.as_str() {
         "rgb" => {
@@ -323,12 +333,7 @@ fn spectrum_value(el: &Element, name: &str) -> Result<Rgb, LoadError> {
             let v = el.required_attr("value")?;
             match tokens(v)[..] {
                 [one] if !one.contains(':') => Rgb::splat(parse_float(one).map_err(|m| el.error(m))?),
-                _ => {
-                    return Err(el.error(format!(
-                        "unsupported: spectrum given as a wavelength list '{v}' \
-                         (haze renders in RGB: use <rgb> or a single constant value)"
-                    )))
-                }
+                _ => wavelength_list(el, v, kind)?,
             }
         }
         _ => Rgb::splat(float_value(el, name)?),
@@ -337,6 +342,35 @@ fn spectrum_value(el: &Element, name: &str) -> Result<Rgb, LoadError> {
         finite(el, name, c)?;
     }
     Ok(rgb)
+}
+
+/// A `<spectrum value="400:0.1, 500:0.3, ...">` converted to linear sRGB. Wavelengths in nm,
+/// strictly increasing, at least two pairs; values finite.
+fn wavelength_list(el: &Element, v: &str, kind: SpectrumKind) -> Result<Rgb, LoadError> {
+    let mut wavelengths = Vec::new();
+    let mut values = Vec::new();
+    for pair in tokens(v) {
+        let Some((w, x)) = pair.split_once(':') else {
+            return Err(el.error(format!("expected wavelength:value pairs in '{v}', got '{pair}'")));
+        };
+        let w = parse_float(w).map_err(|m| el.error(m))?;
+        let x = parse_float(x).map_err(|m| el.error(m))?;
+        if !w.is_finite() || !x.is_finite() {
+            return Err(el.error(format!("non-finite number in '{pair}'")));
+        }
+        if wavelengths.last().is_some_and(|&last| w <= last) {
+            return Err(el.error(format!(
+                "wavelengths must increase strictly, got '{pair}' after {}",
+                wavelengths.last().unwrap_or(&0.0)
+            )));
+        }
+        wavelengths.push(w);
+        values.push(x);
+    }
+    if wavelengths.len() < 2 {
+        return Err(el.error(format!("a spectrum needs at least two wavelength:value pairs, got '{v}'")));
+    }
+    Ok(Rgb(spectrum_to_linear_srgb(&wavelengths, &values, kind)))
 }
 
 /// Three numbers from `value`; one number means all three (Mitsuba 3's `parse_named_vector`).

@@ -4,7 +4,7 @@
 //! is "unsupported"), and a test checks that `docs/mitsuba-compat.md` mentions every entry.
 
 /// One supported plugin: `(kind, type, parameters)`, e.g. `("shape", "sphere", &["center",
-/// ..])`. `kind` is the XML tag (`shape`, `bsdf`, `medium`, `phase`, `emitter`, `sensor`,
+/// ..])`. `kind` is the XML tag (`shape`, `bsdf`, `texture`, `medium`, `phase`, `emitter`, `sensor`,
 /// `film`, `rfilter`, `sampler`, `integrator`); the parameters are the names of the typed
 /// parameters (`<float name="..">`, ...) the plugin reads. Nested objects (a shape's `<bsdf>`,
 /// a medium's `<phase>`, ...) are not listed here.
@@ -20,6 +20,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("integrator", "volpath", INTEGRATOR_PARAMS),
     ("integrator", "volpathmis", INTEGRATOR_PARAMS),
     ("integrator", "path", INTEGRATOR_PARAMS),
+    ("integrator", "moment", &[]),
     ("integrator", "vrl", INTEGRATOR_PARAMS),
     ("integrator", "vpl", INTEGRATOR_PARAMS),
     ("integrator", "vrl_lightcuts", INTEGRATOR_PARAMS),
@@ -28,6 +29,8 @@ const PLUGINS: &[PluginEntry] = &[
     ("sampler", "independent", &["sample_count", "seed"]),
     ("film", "hdrfilm", &["width", "height", "pixel_format", "component_format", "file_format"]),
     ("rfilter", "box", &[]),
+    ("rfilter", "tent", &["radius"]),
+    ("rfilter", "gaussian", &["stddev"]),
     ("shape", "sphere", &["center", "radius", "to_world", "flip_normals"]),
     ("shape", "cube", SHAPE_PARAMS),
     ("shape", "rectangle", SHAPE_PARAMS),
@@ -37,6 +40,37 @@ const PLUGINS: &[PluginEntry] = &[
     ("bsdf", "null", &[]),
     ("bsdf", "diffuse", &["reflectance"]),
     ("bsdf", "dielectric", &["int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"]),
+    ("bsdf", "thindielectric", &["int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"]),
+    (
+        "bsdf",
+        "roughdielectric",
+        &[
+            "distribution",
+            "alpha",
+            "sample_visible",
+            "int_ior",
+            "ext_ior",
+            "specular_reflectance",
+            "specular_transmittance",
+        ],
+    ),
+    ("bsdf", "plastic", &["diffuse_reflectance", "int_ior", "ext_ior", "nonlinear", "specular_reflectance"]),
+    (
+        "bsdf",
+        "roughplastic",
+        &[
+            "distribution",
+            "alpha",
+            "sample_visible",
+            "diffuse_reflectance",
+            "int_ior",
+            "ext_ior",
+            "nonlinear",
+            "specular_reflectance",
+        ],
+    ),
+    ("bsdf", "twosided", &[]),
+    ("texture", "checkerboard", &["color0", "color1", "to_uv"]),
     ("medium", "homogeneous", &["sigma_t", "albedo", "scale", "sample_emitters"]),
     ("phase", "isotropic", &[]),
     ("phase", "hg", &["g"]),
@@ -44,6 +78,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("emitter", "spot", &["to_world", "intensity", "cutoff_angle", "beam_width"]),
     ("emitter", "area", &["radiance"]),
     ("emitter", "constant", &["radiance"]),
+    ("emitter", "envmap", &["filename", "scale", "to_world"]),
 ];
 
 /// Every supported `(kind, type, parameters)`; see [`PluginEntry`].

@@ -6,7 +6,7 @@ use super::document::Element;
 use super::params::{parse_float, Params};
 use super::transform::uniform_scale;
 use super::LoadError;
-use crate::camera::Camera;
+use crate::camera::{Camera, PixelFilter};
 use glam::Mat4;
 
 /// Mitsuba 3's `hdrfilm` default resolution.
@@ -24,9 +24,9 @@ const MAX_RESOLUTION: i32 = 1 << 16;
 /// is given; `near_clip` (0.01), `far_clip` (10000), `to_world` (identity; no scaling).
 pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera, u32), LoadError> {
     let p = b.params(el)?;
-    let (width, height) = match single(&p, "film")? {
+    let (width, height, filter) = match single(&p, "film")? {
         Some(film_el) => film(&p.nested(film_el)?)?,
-        None => (DEFAULT_WIDTH, DEFAULT_HEIGHT),
+        None => (DEFAULT_WIDTH, DEFAULT_HEIGHT, PixelFilter::MITSUBA_DEFAULT),
     };
     let spp = match single(&p, "sampler")? {
         Some(sampler_el) => sampler(&p.nested(sampler_el)?)?,
@@ -58,7 +58,7 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera,
         ));
     }
     p.finish()?;
-    let camera = Camera { to_world, fov_x_deg, near_clip, far_clip, medium, width, height };
+    let camera = Camera { to_world, fov_x_deg, near_clip, far_clip, medium, width, height, filter };
     Ok((camera, spp))
 }
 
@@ -154,9 +154,9 @@ fn fov_x(p: &Params, aspect: f32) -> Result<f32, LoadError> {
 
 /// `hdrfilm`: `width` and `height` (768x576), `pixel_format` `rgb`/`rgba`,
 /// `component_format` `float16`/`float32`, `file_format` `openexr`; haze writes what its
-/// command line asks for, so the last three are only checked. Mitsuba 3's default
-/// reconstruction filter is `gaussian`; haze always uses `box` (see docs/mitsuba-compat.md).
-fn film(p: &Params) -> Result<(u32, u32), LoadError> {
+/// command line asks for, so the last three are only checked. The nested `<rfilter>` (default
+/// `gaussian`, as Mitsuba 3) is read by [`rfilter`].
+fn film(p: &Params) -> Result<(u32, u32, PixelFilter), LoadError> {
     let side = |name: &str, default: u32| -> Result<u32, LoadError> {
         let v = p.int(name, default as i32)?;
         if !(1..=MAX_RESOLUTION).contains(&v) {
@@ -180,11 +180,32 @@ fn film(p: &Params) -> Result<(u32, u32), LoadError> {
             }
         }
     }
-    if let Some(rfilter) = single(p, "rfilter")? {
-        p.nested(rfilter)?.finish()?;
-    }
+    let filter = match single(p, "rfilter")? {
+        Some(el) => rfilter(&p.nested(el)?)?,
+        None => PixelFilter::MITSUBA_DEFAULT,
+    };
     p.finish()?;
-    Ok((width, height))
+    Ok((width, height, filter))
+}
+
+/// `box`; `tent` with `radius` (Mitsuba 3 default 1 pixel); `gaussian` with `stddev` (0.5
+/// pixels; the support is 4 standard deviations). See [`PixelFilter`] for how haze applies them.
+fn rfilter(p: &Params) -> Result<PixelFilter, LoadError> {
+    let positive = |name: &str, default: f32| -> Result<f32, LoadError> {
+        let v = p.float(name, default)?;
+        if v <= 0.0 || v > 16.0 {
+            return Err(p.error_at(name, format!("'{name}' must be in (0, 16] pixels, got {v}")));
+        }
+        Ok(v)
+    };
+    let filter = match p.ty() {
+        "box" => PixelFilter::Box,
+        "tent" => PixelFilter::Tent { radius: positive("radius", 1.0)? },
+        "gaussian" => PixelFilter::Gaussian { stddev: positive("stddev", 0.5)? },
+        other => return Err(p.element().error(format!("unsupported rfilter type '{other}'"))),
+    };
+    p.finish()?;
+    Ok(filter)
 }
 
 /// `independent`: `sample_count` (4); `seed` is accepted and ignored (haze seeds per pixel).

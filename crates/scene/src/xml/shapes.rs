@@ -108,7 +108,7 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), Load
     b.shapes.push(Shape {
         name,
         geometry,
-        bsdf: bsdf.unwrap_or(Bsdf::Diffuse { reflectance: Rgb::splat(0.5) }),
+        bsdf: bsdf.unwrap_or(Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() }),
         interior,
         exterior,
         emitter,

@@ -1,0 +1,123 @@
+//! `haze reference`, `haze compare` and its HTML report end to end on a tiny fog scene (16x12
+//! pixels, a few hundred lights), in a few seconds.
+
+use haze_render::image_io::RgbImage;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+
+/// A closed black box of isotropic fog lit by a small area light (the spirit of bench-smoke-room).
+const TINY_SCENE: &str = r#"<scene version="3.0.0">
+  <integrator type="volpath"><integer name="max_depth" value="20"/></integrator>
+  <medium type="homogeneous" id="fog">
+    <rgb name="albedo" value="0.9, 0.9, 0.9"/>
+    <float name="sigma_t" value="0.8"/>
+    <phase type="isotropic"/>
+  </medium>
+  <sensor type="perspective">
+    <float name="fov" value="60"/>
+    <transform name="to_world"><lookat origin="0, 1, 1.8" target="0.2, 1.5, -1" up="0, 1, 0"/></transform>
+    <ref id="fog"/>
+    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film>
+  </sensor>
+  <shape type="cube">
+    <transform name="to_world"><scale x="2" y="1.25" z="2"/><translate y="1.25"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <ref name="interior" id="fog"/>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="0.25"/><rotate x="1" angle="90"/><translate x="0.5" y="2.45" z="-0.5"/>
+    </transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="40, 40, 40"/></emitter>
+    <ref name="exterior" id="fog"/>
+  </shape>
+</scene>
+"#;
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("haze-compare-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn haze(args: &[&str]) -> Output {
+    Command::new(HAZE).args(args).output().expect("haze runs")
+}
+
+fn check(o: &Output, what: &str) -> String {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{what} failed:\n{err}");
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn compare_writes_table_images_and_report() {
+    let dir = tmp_dir("report");
+    let scene = dir.join("tiny.xml");
+    std::fs::write(&scene, TINY_SCENE).unwrap();
+    let s = |p: &PathBuf| p.to_str().unwrap().to_string();
+    let reference = dir.join("ref.exr");
+    check(&haze(&["reference", &s(&scene), "-o", &s(&reference), "--time", "0.5"]), "haze reference");
+    let r = RgbImage::read_exr(&reference).unwrap();
+    assert_eq!((r.width, r.height), (16, 12));
+
+    let (out, report) = (dir.join("img"), dir.join("report"));
+    let methods = ["volpath", "vrl:200", "vrl_lightcuts:1k,epsilon=0.05", "vpl_lightcuts:2k"];
+    let mut args = vec!["compare".to_string(), s(&scene), "--reference".into(), s(&reference)];
+    args.extend(["--time", "0.3", "-o"].map(String::from));
+    args.extend([s(&out), "--report".into(), s(&report)]);
+    for m in methods {
+        args.extend(["--method".to_string(), m.to_string()]);
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let table = check(&haze(&args), "haze compare");
+
+    assert!(table
+        .starts_with("| method | lights | time (s) | passes | RMSE | SMAPE (%) | relMSE | mean cut size |"));
+    assert_eq!(table.lines().count(), 2 + methods.len(), "{table}");
+    let stems = ["volpath", "vrl-200", "vrl_lightcuts-1000_epsilon0.05", "vpl_lightcuts-2000"];
+    for (m, stem) in methods.iter().zip(stems) {
+        let row = table
+            .lines()
+            .find(|l| l.starts_with(&format!("| {} |", m.replace("1k", "1000").replace("2k", "2000"))));
+        let row = row.unwrap_or_else(|| panic!("no row for {m} in\n{table}"));
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let rmse: f64 = cells[5].parse().unwrap();
+        assert!(rmse.is_finite() && rmse > 0.0, "{row}");
+        assert_eq!(cells[8] != "-", m.contains("lightcuts"), "mean cut size only for lightcuts: {row}");
+        let img = RgbImage::read_exr(&out.join(format!("{stem}.exr"))).unwrap();
+        assert!(img.data.iter().all(|v| v.is_finite()));
+        for suffix in [".png", "_error.png", "_crop.png"] {
+            assert!(report.join(format!("{stem}{suffix}")).is_file(), "{stem}{suffix}");
+        }
+    }
+
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    for needle in
+        ["reference.png", "colorbar.png", "convergence_rmse.svg", "vrl_lightcuts-1000_epsilon0.05_error.png"]
+    {
+        assert!(html.contains(needle), "index.html lacks {needle}");
+    }
+    let svg = std::fs::read_to_string(report.join("convergence_rmse.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("vrl:200"), "the plot has a legend");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_method_specs_and_missing_reference_are_clear_errors() {
+    let dir = tmp_dir("errors");
+    let scene = dir.join("tiny.xml");
+    std::fs::write(&scene, TINY_SCENE).unwrap();
+    let scene = scene.to_str().unwrap();
+    let o = haze(&["compare", scene, "--reference", "nope.exr", "--time", "1", "--method", "vrl:ten"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("got 'ten'"), "{err}");
+    let o = haze(&["compare", scene, "--reference", "nope.exr", "--time", "1", "--method", "volpath"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("nope.exr") && !err.contains("panicked"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,105 @@
+//! Reflectance textures (Mitsuba 3 plugins: a constant spectrum, `checkerboard`).
+//!
+//! A texture maps the surface parameterisation `uv` of a hit to an RGB value. Only the
+//! reflectance-like parameters of the BSDFs take one (`diffuse.reflectance`,
+//! `plastic.diffuse_reflectance`, ...).
+
+use glam::{Affine2, Mat2, Vec2};
+use haze_core::Rgb;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    /// The same value everywhere (a `<rgb>`, `<spectrum>` or `<float>` parameter).
+    Constant(Rgb),
+    /// Mitsuba 3's `checkerboard`: with `(s, t) = to_uv(uv)`, `color0` where the fractional
+    /// parts of `s` and `t` are both above 1/2 or both at most 1/2, else `color1`. The squares
+    /// have side 1/2 in the transformed coordinates.
+    Checkerboard { color0: Rgb, color1: Rgb, to_uv: Affine2 },
+}
+
+impl From<Rgb> for Texture {
+    fn from(c: Rgb) -> Self {
+        Texture::Constant(c)
+    }
+}
+
+impl Texture {
+    /// The value at surface coordinates `uv`.
+    pub fn eval(&self, uv: Vec2) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checkerboard { color0, color1, to_uv } => {
+                let p = to_uv.transform_point2(uv);
+                let upper = |x: f32| x - x.floor() > 0.5;
+                if upper(p.x) == upper(p.y) {
+                    *color0
+                } else {
+                    *color1
+                }
+            }
+        }
+    }
+
+    /// The average over the texture's domain (Mitsuba's `Texture::mean`), used for sampling
+    /// weights that must not depend on the hit.
+    pub fn mean(&self) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checkerboard { color0, color1, .. } => (*color0 + *color1) * 0.5,
+        }
+    }
+
+    /// True if the texture is zero everywhere.
+    pub fn is_black(&self) -> bool {
+        match self {
+            Texture::Constant(c) => c.is_black(),
+            Texture::Checkerboard { color0, color1, .. } => color0.is_black() && color1.is_black(),
+        }
+    }
+
+    /// Smallest and largest channel value the texture takes anywhere (for validation).
+    pub fn range(&self) -> (f32, f32) {
+        match self {
+            Texture::Constant(c) => (c.min_component(), c.max_component()),
+            Texture::Checkerboard { color0, color1, .. } => (
+                color0.min_component().min(color1.min_component()),
+                color0.max_component().max(color1.max_component()),
+            ),
+        }
+    }
+}
+
+/// The 2D affine part of a Mitsuba `to_uv` 4x4 transform: the upper-left 2x2 block and the
+/// first two translation entries (Mitsuba 3 `Transform4f::extract`).
+pub fn affine2_from_mat4(m: glam::Mat4) -> Affine2 {
+    Affine2::from_mat2_translation(
+        Mat2::from_cols(m.x_axis.truncate().truncate(), m.y_axis.truncate().truncate()),
+        m.w_axis.truncate().truncate(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checkerboard_pattern_and_mean() {
+        let t = Texture::Checkerboard {
+            color0: Rgb::splat(0.4),
+            color1: Rgb::splat(0.2),
+            to_uv: Affine2::IDENTITY,
+        };
+        assert_eq!(t.eval(Vec2::new(0.25, 0.25)), Rgb::splat(0.4));
+        assert_eq!(t.eval(Vec2::new(0.75, 0.75)), Rgb::splat(0.4));
+        assert_eq!(t.eval(Vec2::new(0.75, 0.25)), Rgb::splat(0.2));
+        assert_eq!(t.eval(Vec2::new(-0.25, 0.25)), Rgb::splat(0.2), "periodic, also for negative uv");
+        assert!((t.mean()[0] - 0.3).abs() < 1e-6);
+        let scaled = Texture::Checkerboard {
+            color0: Rgb::splat(0.4),
+            color1: Rgb::splat(0.2),
+            to_uv: affine2_from_mat4(glam::Mat4::from_scale(glam::Vec3::splat(16.0))),
+        };
+        assert_eq!(scaled.eval(Vec2::new(0.75 / 16.0, 0.25 / 16.0)), Rgb::splat(0.2));
+        assert_eq!(scaled.eval(Vec2::new(0.75 / 16.0, 0.75 / 16.0)), Rgb::splat(0.4));
+    }
+}
