@@ -68,6 +68,25 @@ impl VrlRecord {
     }
 }
 
+impl VrlRecord {
+    /// The VRL the estimators take (its flux at `v` is [`Self::flux_at`]).
+    pub fn to_vrl(&self) -> crate::vrl::Vrl {
+        crate::vrl::Vrl {
+            seg: crate::vrl::Segment::new(self.o, self.d, self.len),
+            flux: self.beta,
+            ratio: self.ratio,
+            medium: self.medium,
+        }
+    }
+}
+
+impl VplRecord {
+    /// The VPL the estimators take.
+    pub fn to_vpl(&self) -> crate::vpl::Vpl {
+        crate::vpl::Vpl { p: self.p, d_in: self.d_in, flux: self.flux, medium: self.medium }
+    }
+}
+
 /// A medium scattering vertex of a light path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VplRecord {

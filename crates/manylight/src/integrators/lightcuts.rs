@@ -6,19 +6,20 @@
 //! Component split as in `vrl`/`vpl`: lights that follow a surface bounce live in a tree of
 //! their own, so `multiple` and `surface` stay separate.
 
-use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, SEGMENTS};
-use crate::camera::{trace_camera_ray, CameraSegment};
-use crate::lighttrace::trace_light_paths;
-use crate::single::single_scattering;
+use super::{
+    connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
+};
+use crate::camera::CameraSegment;
+use crate::lighttrace::{trace_light_paths, VplRecord, VrlRecord};
 use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
 use crate::tree::lights::LightSummary;
 use crate::tree::{LightTree, Node};
 use crate::vpl::{sample_vpl_contribution, Vpl};
-use crate::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
+use crate::vrl::{sample_vrl_contribution, Vrl, VrlMedium};
 use haze_core::{Ray, Rgb, Sampler};
-use haze_render::{Component, Integrator, PathRadiance};
+use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
 use std::cell::RefCell;
@@ -228,30 +229,12 @@ impl Integrator for LightcutsIntegrator {
         }
         let (vrls, vpls) = match self.kind {
             LightKind::Vrl => {
-                let mut split: [Vec<Vrl>; 2] = [Vec::new(), Vec::new()];
-                for r in &set.vrls {
-                    split[r.after_surface as usize].push(Vrl {
-                        seg: Segment::new(r.o, r.d, r.len),
-                        flux: r.beta,
-                        ratio: r.ratio,
-                        medium: r.medium,
-                    });
-                }
-                let [a, b] = split;
+                let [a, b] = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
                 let s = |v: &Vrl| LightSummary::vrl(v, &media[v.medium as usize]);
                 ([self.build(a, s, tree_seed), self.build(b, s, tree_seed ^ 1)], empty())
             }
             LightKind::Vpl => {
-                let mut split: [Vec<Vpl>; 2] = [Vec::new(), Vec::new()];
-                for r in &set.vpls {
-                    split[r.after_surface as usize].push(Vpl {
-                        p: r.p,
-                        d_in: r.d_in,
-                        flux: r.flux,
-                        medium: r.medium,
-                    });
-                }
-                let [a, b] = split;
+                let [a, b] = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
                 (
                     empty(),
                     [
@@ -293,59 +276,49 @@ impl Integrator for LightcutsIntegrator {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        SEGMENTS.with_borrow_mut(|segments| {
-            CUT_SCRATCH.with_borrow_mut(|scratch| {
-                let mut out = PathRadiance::default();
-                let path = trace_camera_ray(scene, ray, medium, segments);
-                out.add(Component::Emitted, path.emitted);
-                for cs in segments.iter() {
-                    out.add(Component::Single, single_scattering(scene, cs, sampler));
-                    let cam_medium = &pass.media[cs.medium as usize];
-                    let bound = BoundContext {
-                        seg: cs.seg,
-                        camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
-                        light_factor: pass.light_factor,
-                        sigma_t_min: pass.sigma_t_min,
-                        kind: self.settings.bound,
-                        theta: self.settings.theta,
-                    };
-                    let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
-                    for (i, comp) in [(0, Component::Multiple), (1, Component::Surface)] {
-                        let (value, stats) = match self.kind {
-                            LightKind::Vrl => {
-                                let f = &pass.vrls[i];
-                                let mut o = VrlOracle {
-                                    scene,
-                                    tree: &f.tree,
-                                    cs,
-                                    cam_medium,
-                                    lights: &f.lights,
-                                    media: &pass.media,
-                                    bound,
-                                    key,
-                                };
-                                lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
-                            }
-                            LightKind::Vpl => {
-                                let f = &pass.vpls[i];
-                                let mut o = VplOracle {
-                                    scene,
-                                    tree: &f.tree,
-                                    cs,
-                                    cam_medium,
-                                    lights: &f.lights,
-                                    media: &pass.media,
-                                    bound,
-                                    key,
-                                };
-                                lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
-                            }
+        CUT_SCRATCH.with_borrow_mut(|scratch| {
+            many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
+                let cam_medium = &pass.media[cs.medium as usize];
+                let bound = BoundContext {
+                    seg: cs.seg,
+                    camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
+                    light_factor: pass.light_factor,
+                    sigma_t_min: pass.sigma_t_min,
+                    kind: self.settings.bound,
+                    theta: self.settings.theta,
+                };
+                let (value, stats) = match self.kind {
+                    LightKind::Vrl => {
+                        let f = &pass.vrls[group];
+                        let mut o = VrlOracle {
+                            scene,
+                            tree: &f.tree,
+                            cs,
+                            cam_medium,
+                            lights: &f.lights,
+                            media: &pass.media,
+                            bound,
+                            key,
                         };
-                        out.add(comp, cs.tr_before * value);
-                        self.record(&stats);
+                        lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
                     }
-                }
-                out
+                    LightKind::Vpl => {
+                        let f = &pass.vpls[group];
+                        let mut o = VplOracle {
+                            scene,
+                            tree: &f.tree,
+                            cs,
+                            cam_medium,
+                            lights: &f.lights,
+                            media: &pass.media,
+                            bound,
+                            key,
+                        };
+                        lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
+                    }
+                };
+                self.record(&stats);
+                value
             })
         })
     }

@@ -107,3 +107,45 @@ pub(crate) fn light_uniforms(key: u64, light: u32) -> glam::Vec2 {
     let scale = 1.0 / (1u32 << 24) as f32;
     glam::Vec2::new((h >> 40) as f32 * scale, ((h >> 8) & 0xff_ffff) as f32 * scale)
 }
+
+/// The per-camera-ray skeleton every many-light integrator shares: split the ray into medium
+/// segments, add the light seen directly, then per segment single scattering and, for each of
+/// the two light groups (0: medium-only lights -> `multiple`, 1: lights after a surface bounce
+/// -> `surface`), the sum `lights(segment, key, group)` of the virtual lights. `key` seeds the
+/// per-light random numbers (`light_uniforms`); it is drawn right after single scattering, in
+/// the same order for every integrator, so their images can be compared sample for sample.
+pub(crate) fn many_light_radiance(
+    scene: &Scene,
+    ray: haze_core::Ray,
+    medium: Option<MediumId>,
+    sampler: &mut haze_core::Sampler,
+    mut lights: impl FnMut(&CameraSegment, u64, usize) -> haze_core::Rgb,
+) -> haze_render::PathRadiance {
+    use haze_render::Component;
+    SEGMENTS.with_borrow_mut(|segments| {
+        let mut out = haze_render::PathRadiance::default();
+        let path = crate::camera::trace_camera_ray(scene, ray, medium, segments);
+        out.add(Component::Emitted, path.emitted);
+        for cs in segments.iter() {
+            out.add(Component::Single, crate::single::single_scattering(scene, cs, sampler));
+            let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
+            for (group, comp) in [(0, Component::Multiple), (1, Component::Surface)] {
+                out.add(comp, cs.tr_before * lights(cs, key, group));
+            }
+        }
+        out
+    })
+}
+
+/// Splits light records into the two groups of [`many_light_radiance`].
+pub(crate) fn split_groups<R, L>(
+    records: &[R],
+    after_surface: impl Fn(&R) -> bool,
+    make: impl Fn(&R) -> L,
+) -> [Vec<L>; 2] {
+    let mut groups = [Vec::new(), Vec::new()];
+    for r in records {
+        groups[after_surface(r) as usize].push(make(r));
+    }
+    groups
+}

@@ -1,14 +1,14 @@
 //! `vpl`: brute-force virtual point lights, every VPL of the pass evaluated for every camera
 //! segment with equiangular sampling of the camera point.
 
-use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, SEGMENTS};
-use crate::camera::trace_camera_ray;
-use crate::lighttrace::trace_light_paths;
-use crate::single::single_scattering;
+use super::{
+    connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
+};
+use crate::lighttrace::{trace_light_paths, VplRecord};
 use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
-use haze_render::{Component, Integrator, PathRadiance};
+use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -22,9 +22,9 @@ pub struct VplIntegrator {
     passes: AtomicU64,
 }
 
+/// The VPLs of one pass in the two groups of `many_light_radiance`.
 pub struct VplPass {
-    medium_only: Vec<Vpl>,
-    after_surface: Vec<Vpl>,
+    groups: [Vec<Vpl>; 2],
     media: Vec<VrlMedium>,
 }
 
@@ -52,16 +52,8 @@ impl Integrator for VplIntegrator {
             .expect("emitters were checked when the integrator was made");
         self.made.fetch_add(set.vpls.len() as u64, Ordering::Relaxed);
         self.passes.fetch_add(1, Ordering::Relaxed);
-        let (mut medium_only, mut after_surface) = (Vec::new(), Vec::new());
-        for r in &set.vpls {
-            let v = Vpl { p: r.p, d_in: r.d_in, flux: r.flux, medium: r.medium };
-            if r.after_surface {
-                after_surface.push(v);
-            } else {
-                medium_only.push(v);
-            }
-        }
-        VplPass { medium_only, after_surface, media: media(scene) }
+        let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
+        VplPass { groups, media: media(scene) }
     }
 
     fn radiance(
@@ -72,34 +64,21 @@ impl Integrator for VplIntegrator {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        SEGMENTS.with_borrow_mut(|segments| {
-            let mut out = PathRadiance::default();
-            let path = trace_camera_ray(scene, ray, medium, segments);
-            out.add(Component::Emitted, path.emitted);
-            for cs in segments.iter() {
-                out.add(Component::Single, single_scattering(scene, cs, sampler));
-                // Per-light random numbers from one key per segment (see `light_uniforms`).
-                let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
-                let cam_medium = &pass.media[cs.medium as usize];
-                for (lights, comp) in
-                    [(&pass.medium_only, Component::Multiple), (&pass.after_surface, Component::Surface)]
-                {
-                    let mut sum = Rgb::ZERO;
-                    for (i, vpl) in lights.iter().enumerate() {
-                        sum += sample_vpl_contribution(
-                            &cs.seg,
-                            cam_medium,
-                            vpl,
-                            &pass.media[vpl.medium as usize].phase,
-                            light_uniforms(key, i as u32).x,
-                            self.clamp,
-                            |y, x| connect(scene, vpl.medium, y, x),
-                        );
-                    }
-                    out.add(comp, cs.tr_before * sum);
-                }
+        many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
+            let cam_medium = &pass.media[cs.medium as usize];
+            let mut sum = Rgb::ZERO;
+            for (i, vpl) in pass.groups[group].iter().enumerate() {
+                sum += sample_vpl_contribution(
+                    &cs.seg,
+                    cam_medium,
+                    vpl,
+                    &pass.media[vpl.medium as usize].phase,
+                    light_uniforms(key, i as u32).x,
+                    self.clamp,
+                    |y, x| connect(scene, vpl.medium, y, x),
+                );
             }
-            out
+            sum
         })
     }
 

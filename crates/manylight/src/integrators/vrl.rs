@@ -1,14 +1,14 @@
 //! `vrl`: brute-force virtual ray lights, every VRL of the pass evaluated for every camera
 //! segment with the joint importance sampling of Novak et al. 2012.
 
-use super::{connect, light_uniforms, media, paths_per_pass, ManyLightSettings, SEGMENTS};
-use crate::camera::trace_camera_ray;
-use crate::lighttrace::trace_light_paths;
-use crate::single::single_scattering;
+use super::{
+    connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
+};
+use crate::lighttrace::{trace_light_paths, VrlRecord};
 use crate::vrl::estimator::{contributes, point_pair_estimate, sample_point_pair, PointPair};
 use crate::vrl::{Segment, Vrl, VrlMedium};
 use haze_core::{Ray, Rgb, Sampler};
-use haze_render::{Component, Integrator, PathRadiance};
+use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -22,10 +22,10 @@ pub struct VrlIntegrator {
     evaluations: AtomicU64,
 }
 
-/// The VRLs of one pass, split by component so that the hot loop does not branch per light.
+/// The VRLs of one pass in the two groups of `many_light_radiance` (medium-only, after a
+/// surface bounce), so that the hot loop does not branch per light.
 pub struct VrlPass {
-    medium_only: Vec<Vrl>,
-    after_surface: Vec<Vrl>,
+    groups: [Vec<Vrl>; 2],
     media: Vec<VrlMedium>,
 }
 
@@ -64,17 +64,8 @@ impl Integrator for VrlIntegrator {
             .expect("emitters were checked when the integrator was made");
         self.made.fetch_add(set.vrls.len() as u64, Ordering::Relaxed);
         self.passes.fetch_add(1, Ordering::Relaxed);
-        let (mut medium_only, mut after_surface) = (Vec::new(), Vec::new());
-        for r in &set.vrls {
-            let v =
-                Vrl { seg: Segment::new(r.o, r.d, r.len), flux: r.beta, ratio: r.ratio, medium: r.medium };
-            if r.after_surface {
-                after_surface.push(v);
-            } else {
-                medium_only.push(v);
-            }
-        }
-        VrlPass { medium_only, after_surface, media: media(scene) }
+        let groups = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
+        VrlPass { groups, media: media(scene) }
     }
 
     fn radiance(
@@ -85,25 +76,10 @@ impl Integrator for VrlIntegrator {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        SEGMENTS.with_borrow_mut(|segments| {
-            let mut out = PathRadiance::default();
-            let path = trace_camera_ray(scene, ray, medium, segments);
-            out.add(Component::Emitted, path.emitted);
-            let lights = (pass.medium_only.len() + pass.after_surface.len()) as u64;
-            self.evaluations.fetch_add(segments.len() as u64 * lights, Ordering::Relaxed);
-            for cs in segments.iter() {
-                out.add(Component::Single, single_scattering(scene, cs, sampler));
-                // Per-light random numbers from one key per segment (see `light_uniforms`).
-                let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
-                let cam_medium = &pass.media[cs.medium as usize];
-                for (lights, comp) in
-                    [(&pass.medium_only, Component::Multiple), (&pass.after_surface, Component::Surface)]
-                {
-                    let sum = sum_contributions(scene, &cs.seg, cam_medium, lights, &pass.media, key);
-                    out.add(comp, cs.tr_before * sum);
-                }
-            }
-            out
+        many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
+            let lights = &pass.groups[group];
+            self.evaluations.fetch_add(lights.len() as u64, Ordering::Relaxed);
+            sum_contributions(scene, &cs.seg, &pass.media[cs.medium as usize], lights, &pass.media, key)
         })
     }
 
