@@ -56,30 +56,16 @@ pub struct BoundContext {
 }
 
 impl BoundContext {
-    /// Bound (max over channels) for a VRL cluster.
+    /// Bound (max over channels) for a VRL cluster, from its box.
     pub fn vrl(&self, node: &Node) -> f32 {
         let (h_seg, h_line) = distances(&self.seg, &node.bounds);
-        let h = match self.kind {
-            BoundKind::Paper => h_seg,
-            BoundKind::Conservative => h_line,
-        };
-        if h <= 0.0 {
-            return f32::INFINITY;
-        }
-        (self.common(node, h_seg) * (node.l_max / h)).max_component()
+        self.finish(node, h_seg, h_line, node.l_max)
     }
 
-    /// Bound (max over channels) for a VPL cluster.
+    /// Bound (max over channels) for a VPL cluster, from its box.
     pub fn vpl(&self, node: &Node) -> f32 {
         let (h_seg, h_line) = distances(&self.seg, &node.bounds);
-        let h = match self.kind {
-            BoundKind::Paper => h_seg,
-            BoundKind::Conservative => h_line,
-        };
-        if h <= 0.0 {
-            return f32::INFINITY;
-        }
-        (self.common(node, h_seg) / h).max_component()
+        self.finish(node, h_seg, h_line, 1.0)
     }
 
     /// `Phi f_max T_r(h_min) Theta_max`.
@@ -218,6 +204,8 @@ impl BoundContext {
         self.finish(node, h_seg, h_line, 1.0)
     }
 
+    /// `common * length / h`, with `h` the segment or line distance as `kind` says; `length` is
+    /// `L_max` for VRLs and 1 for VPLs.
     fn finish(&self, node: &Node, h_seg: f32, h_line: f32, length: f32) -> f32 {
         let h = match self.kind {
             BoundKind::Paper => h_seg,
