@@ -1,9 +1,9 @@
 //! `haze compare` (equal-time comparison of methods against a reference) and `haze reference`.
 
-use crate::methods::{Method, MethodOptions};
 use crate::render_cmd::{load_scene, set_threads, RenderArgs};
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser};
+use haze_engine::methods::{Method, MethodOptions};
 use haze_manylight::integrators::LightBudget;
 use haze_render::image_io::RgbImage;
 use haze_render::metrics::Metrics;

@@ -2,7 +2,6 @@
 
 mod bench;
 mod compare;
-mod methods;
 mod render_cmd;
 mod report;
 

@@ -1,8 +1,8 @@
 //! `haze render`.
 
-use crate::methods::{Method, MethodOptions};
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use haze_engine::methods::{Method, MethodOptions};
 use haze_manylight::integrators::{Builder, LightBudget, LightcutSettings};
 use haze_manylight::tree::bound::BoundKind;
 use haze_manylight::tree::cut::CutSettings;

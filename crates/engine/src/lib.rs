@@ -1,0 +1,17 @@
+//! haze's front-end API: what the `haze` command line and the Python binding share, so that
+//! neither holds rendering logic of its own.
+//!
+//! - [`methods`]: an integrator chosen by name (`volpath`, `vrl`, `vpl`, `vrl_lightcuts`,
+//!   `vpl_lightcuts`) with its options, and rendering with it.
+//!
+//! The crates below stay the place for the science: `haze-scene` (loader, scene model),
+//! `haze-render` (film, progressive passes, volpath, metrics), `haze-manylight` (virtual lights,
+//! light tree, lightcuts).
+
+pub mod methods;
+
+pub use haze_core as core;
+pub use haze_manylight as manylight;
+pub use haze_render as render;
+pub use haze_scene as scene;
+pub use methods::{Method, MethodOptions, METHOD_NAMES};
