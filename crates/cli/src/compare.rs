@@ -144,8 +144,15 @@ pub struct CompareArgs {
     /// Scene file (Mitsuba 3 XML).
     pub scene: PathBuf,
     /// Reference image (EXR), e.g. from `haze reference SCENE.xml --time 600 -o REF.exr`.
+    /// Without it, a volpath reference is rendered first for `--reference-time` seconds and
+    /// written to OUT_DIR/reference.exr.
     #[arg(long)]
-    pub reference: PathBuf,
+    pub reference: Option<PathBuf>,
+    /// Seconds of volpath for the reference made when `--reference` is not given
+    /// (default: 10 x `--time`). Its noise adds to every method's error (MSE_measured ~
+    /// MSE_true + MSE_reference, seeds differ), so give it much more time than the methods.
+    #[arg(long)]
+    pub reference_time: Option<f64>,
     /// Wall-clock budget of each method in seconds, light tracing and tree builds included.
     #[arg(long)]
     pub time: f64,
@@ -277,21 +284,48 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if !(args.time.is_finite() && args.time > 0.0) {
         bail!("--time must be a positive number of seconds, got {}", args.time);
     }
+    if args.reference.is_some() && args.reference_time.is_some() {
+        bail!("--reference-time only applies when no --reference is given");
+    }
     let scene = load_scene(&args.scene, &args.define)?;
-    let reference = RgbImage::read_exr(&args.reference)
-        .with_context(|| format!("reading the reference {}", args.reference.display()))?;
+    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("creating {}", args.out_dir.display()))?;
+    let reference_path = match &args.reference {
+        Some(path) => path.clone(),
+        None => {
+            let time = args.reference_time.unwrap_or(10.0 * args.time);
+            if !(time.is_finite() && time > 0.0) {
+                bail!("--reference-time must be a positive number of seconds, got {time}");
+            }
+            let output = args.out_dir.join("reference.exr");
+            eprintln!(
+                "no --reference given: rendering one with volpath for {time:.1} s into {}",
+                output.display()
+            );
+            reference(ReferenceArgs {
+                scene: args.scene.clone(),
+                output: output.clone(),
+                time,
+                seed: REFERENCE_SEED,
+                threads: None,
+                define: args.define.clone(),
+            })
+            .context("making the reference")?;
+            output
+        }
+    };
+    let reference = RgbImage::read_exr(&reference_path)
+        .with_context(|| format!("reading the reference {}", reference_path.display()))?;
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     if (reference.width, reference.height) != (w, h) {
         bail!(
             "the reference {} is {}x{} but the scene renders {}x{}",
-            args.reference.display(),
+            reference_path.display(),
             reference.width,
             reference.height,
             w,
             h
         );
     }
-    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("creating {}", args.out_dir.display()))?;
     let budget = Duration::from_secs_f64(args.time);
     let mut results = Vec::new();
     for spec in &args.methods {
@@ -335,6 +369,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
     Ok(())
 }
 
+/// Default seed of references: far from the methods' default seed 0, so the reference's noise
+/// is independent of theirs.
+pub const REFERENCE_SEED: u64 = 1_000_003;
+
 #[derive(Args, Debug)]
 pub struct ReferenceArgs {
     /// Scene file (Mitsuba 3 XML).
@@ -346,7 +384,7 @@ pub struct ReferenceArgs {
     #[arg(long)]
     pub time: f64,
     /// Seed (use another seed than the compared methods').
-    #[arg(long, default_value_t = 1_000_003)]
+    #[arg(long, default_value_t = REFERENCE_SEED)]
     pub seed: u64,
     /// Worker threads (default: all cores).
     #[arg(long)]

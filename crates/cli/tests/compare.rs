@@ -108,6 +108,41 @@ fn compare_writes_table_images_and_report() {
 }
 
 #[test]
+fn compare_without_reference_renders_one_first() {
+    let dir = tmp_dir("auto-ref");
+    let scene = dir.join("tiny.xml");
+    std::fs::write(&scene, TINY_SCENE).unwrap();
+    let out = dir.join("out");
+    let (scene, out_s) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let args =
+        ["compare", scene, "--time", "0.2", "--reference-time", "0.4", "--method", "volpath", "-o", out_s];
+    let o = haze(&args);
+    let table = check(&o, "haze compare without --reference");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no --reference given: rendering one with volpath for 0.4 s"), "{err}");
+    let reference = RgbImage::read_exr(&out.join("reference.exr")).expect("the reference is kept");
+    assert_eq!((reference.width, reference.height), (16, 12));
+    let volpath = RgbImage::read_exr(&out.join("volpath.exr")).unwrap();
+    assert_ne!(reference.data, volpath.data, "the reference uses its own seed");
+    assert_eq!(table.lines().count(), 3, "{table}");
+    let o = haze(&[
+        "compare",
+        scene,
+        "--reference",
+        "r.exr",
+        "--reference-time",
+        "1",
+        "--time",
+        "1",
+        "--method",
+        "volpath",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--reference-time only applies"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn bad_method_specs_and_missing_reference_are_clear_errors() {
     let dir = tmp_dir("errors");
     let scene = dir.join("tiny.xml");
