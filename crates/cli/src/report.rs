@@ -22,8 +22,25 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
 ];
+/// Base of a log axis from `lo` to `hi`: 10, or 2 when the range holds less than a decade (see
+/// `Report::plot`).
+fn log_base(lo: f64, hi: f64) -> f64 {
+    if hi < 8.0 * lo {
+        2.0
+    } else {
+        10.0
+    }
+}
+
 /// Magnification of the crops.
 const ZOOM: usize = 4;
+
+/// Marks the page once loaded: `data-images` on `<body>` is `ok` or the list of images that did
+/// not load, so a headless browser (`scripts/report-screenshot.sh`) can check the page and not
+/// only take a picture of it.
+const IMAGE_CHECK: &str = "<script>window.addEventListener('load', () => {\n\
+  const bad = [...document.images].filter(i => !i.complete || i.naturalWidth === 0).map(i => i.getAttribute('src'));\n\
+  document.body.dataset.images = bad.length ? 'missing: ' + bad.join(' ') : 'ok';\n});</script>\n";
 
 pub struct Report<'a> {
     pub scene: &'a Path,
@@ -110,6 +127,8 @@ impl Report<'_> {
     }
 
     /// Log-log plot of `metric` against time, one line per method.
+    /// plotters labels a log axis at the powers of its base inside the range only: an axis spanning
+    /// less than a decade would have no labels in base 10, so it uses base 2.
     fn plot(&self, path: &Path, label: &str, metric: impl Fn(&CurvePoint) -> f64) -> Result<()> {
         let pts: Vec<Vec<(f64, f64)>> = self
             .results
@@ -138,7 +157,10 @@ impl Report<'_> {
                 .margin(12)
                 .x_label_area_size(40)
                 .y_label_area_size(70)
-                .build_cartesian_2d((t0 * 0.8..t1 * 1.25).log_scale(), (e0 * 0.8..e1 * 1.25).log_scale())?;
+                .build_cartesian_2d(
+                    (t0 * 0.8..t1 * 1.25).log_scale().base(log_base(t0, t1)),
+                    (e0 * 0.8..e1 * 1.25).log_scale().base(log_base(e0, e1)),
+                )?;
             chart
                 .configure_mesh()
                 .x_desc("time (s)")
@@ -242,10 +264,11 @@ td:first-child, th:first-child {{ text-align: left; }}
         for r in self.results {
             s += &fig(&format!("{}_crop.png", r.spec.file_stem()), &esc(&r.spec.to_string()), "pix");
         }
-        s +=
+        s += &format!(
             "</div>\n<h2>Convergence</h2>\n<p>Error of the image so far, sampled at the end of passes.</p>\n\
               <div class=\"row\">\n<img src=\"convergence_rmse.svg\" alt=\"RMSE vs time\">\n\
-              <img src=\"convergence_smape.svg\" alt=\"SMAPE vs time\">\n</div>\n</body></html>\n";
+              <img src=\"convergence_smape.svg\" alt=\"SMAPE vs time\">\n</div>\n{IMAGE_CHECK}</body></html>\n"
+        );
         s
     }
 }

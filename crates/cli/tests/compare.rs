@@ -104,6 +104,11 @@ fn compare_writes_table_images_and_report() {
     }
     let svg = std::fs::read_to_string(report.join("convergence_rmse.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("vrl:200"), "the plot has a legend");
+    // Axis labels: plotters writes tick labels as <text> elements; a log axis without a power of its
+    // base in range would have none (see report::log_base).
+    let labels = svg.matches("text-anchor=\"end\"").count();
+    assert!(labels >= 2, "the RMSE axis has tick labels: {labels}");
+    assert!(html.contains("document.body.dataset.images"), "the page marks whether its images loaded");
     std::fs::remove_dir_all(&dir).ok();
 }
 
