@@ -7,6 +7,9 @@
 # Budgets come from the environment, so a quick check of the script is possible:
 #   REF_TIME=600 BUDGET=60 RES=128 scripts/results.sh      # the documented run (about 1.5 h)
 #   REF_TIME=5 BUDGET=2 RES=32 scripts/results.sh          # a smoke test of the script
+# With REUSE_REF=1 an existing $OUT/<scene>/reference.exr is kept (e.g. rendered earlier with
+# `nice`, while the machine was busy: a reference's quality does not depend on the load, an
+# equal-time comparison's fairness does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REF_TIME=${REF_TIME:-600}
@@ -39,7 +42,11 @@ for s in $SCENES; do
   scene=scenes/bench-$s.xml
   dir=$OUT/$s
   mkdir -p "$dir"
-  "$HAZE" reference "$scene" -D res="$RES" --time "$REF_TIME" -o "$dir/reference.exr" >&2
+  if [ "${REUSE_REF:-0}" = 1 ] && [ -f "$dir/reference.exr" ]; then
+    echo "reusing $dir/reference.exr" >&2
+  else
+    "$HAZE" reference "$scene" -D res="$RES" --time "$REF_TIME" -o "$dir/reference.exr" >&2
+  fi
   table=$("$HAZE" compare "$scene" -D res="$RES" --reference "$dir/reference.exr" --time "$BUDGET" \
     --method volpath --method vrl:10000 --method vrl_lightcuts:100000 --method vpl_lightcuts:1000000 \
     -o "$dir/images" --report "$dir/report")
