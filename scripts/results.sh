@@ -21,6 +21,7 @@ SCENES=${SCENES:-"smoke-room spot-beam fog-shadow"}
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
 DOC=docs/results.md
+mkdir -p docs/results
 
 {
   echo "# Results: equal-time comparisons on haze's benchmark scenes"
@@ -53,7 +54,7 @@ for s in $SCENES; do
   sweep=$("$HAZE" compare "$scene" -D res="$RES" --reference "$dir/reference.exr" --time "$SWEEP_BUDGET" \
     --method vrl:1000 --method vrl:10000 --method vrl:100000 \
     --method vrl_lightcuts:1000 --method vrl_lightcuts:10000 --method vrl_lightcuts:100000 \
-    -o "$dir/sweep")
+    -o "$dir/sweep" --lights-plot "docs/results/$s-rmse-vs-lights.svg")
   {
     echo
     echo "## bench-$s"
@@ -63,6 +64,8 @@ for s in $SCENES; do
     echo "$table"
     echo
     echo "RMSE vs number of lights per pass (${SWEEP_BUDGET} s each):"
+    echo
+    echo "![RMSE vs lights, bench-$s](results/$s-rmse-vs-lights.svg)"
     echo
     echo "$sweep"
   } >> "$DOC.tmp"

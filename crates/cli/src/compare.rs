@@ -166,6 +166,10 @@ pub struct CompareArgs {
     /// Also write a static HTML report (index.html and its images) to this folder.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Also plot RMSE against the number of lights per pass (SVG), one line per method family;
+    /// for runs of one method at several light counts, e.g. `--method vrl:1k --method vrl:10k ...`.
+    #[arg(long, value_name = "FILE.svg")]
+    pub lights_plot: Option<PathBuf>,
     /// Seed of every method.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -353,6 +357,10 @@ pub fn run(args: CompareArgs) -> Result<()> {
         results.push(r);
     }
     print!("{}", markdown_table(&results));
+    if let Some(path) = &args.lights_plot {
+        crate::report::lights_plot(path, &results, args.time)?;
+        eprintln!("wrote the plot {}", path.display());
+    }
     if let Some(dir) = &args.report {
         let page = crate::report::Report {
             scene: &args.scene,

@@ -127,65 +127,13 @@ impl Report<'_> {
     }
 
     /// Log-log plot of `metric` against time, one line per method.
-    /// plotters labels a log axis at the powers of its base inside the range only: an axis spanning
-    /// less than a decade would have no labels in base 10, so it uses base 2.
     fn plot(&self, path: &Path, label: &str, metric: impl Fn(&CurvePoint) -> f64) -> Result<()> {
-        let pts: Vec<Vec<(f64, f64)>> = self
+        let series: Vec<(String, Vec<(f64, f64)>)> = self
             .results
             .iter()
-            .map(|r| {
-                r.curve
-                    .iter()
-                    .map(|p| (p.seconds, metric(p)))
-                    .filter(|&(t, e)| t > 0.0 && e > 0.0 && e.is_finite())
-                    .collect()
-            })
+            .map(|r| (r.spec.to_string(), r.curve.iter().map(|p| (p.seconds, metric(p))).collect()))
             .collect();
-        let all = pts.iter().flatten();
-        let (mut t0, mut t1, mut e0, mut e1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for &(t, e) in all {
-            (t0, t1, e0, e1) = (t0.min(t), t1.max(t), e0.min(e), e1.max(e));
-        }
-        if t0 > t1 {
-            (t0, t1, e0, e1) = (0.1, 1.0, 0.1, 1.0);
-        }
-        let draw = || -> Result<(), Box<dyn std::error::Error>> {
-            let root = SVGBackend::new(path, (640, 420)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let mut chart = ChartBuilder::on(&root)
-                .caption(format!("{label} vs time (log-log)"), ("sans-serif", 18))
-                .margin(12)
-                .x_label_area_size(40)
-                .y_label_area_size(70)
-                .build_cartesian_2d(
-                    (t0 * 0.8..t1 * 1.25).log_scale().base(log_base(t0, t1)),
-                    (e0 * 0.8..e1 * 1.25).log_scale().base(log_base(e0, e1)),
-                )?;
-            chart
-                .configure_mesh()
-                .x_desc("time (s)")
-                .y_desc(label)
-                .x_label_formatter(&|v| significant(*v))
-                .y_label_formatter(&|v| significant(*v))
-                .draw()?;
-            for (i, (r, p)) in self.results.iter().zip(&pts).enumerate() {
-                let color = PALETTE[i % PALETTE.len()].to_rgba();
-                chart
-                    .draw_series(LineSeries::new(p.iter().copied(), color.stroke_width(2)))?
-                    .label(r.spec.to_string())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-                chart.draw_series(p.iter().map(|&xy| Circle::new(xy, 3, color.filled())))?;
-            }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()?;
-            root.present()?;
-            Ok(())
-        };
-        draw().map_err(|e| anyhow!("drawing {}: {e}", path.display()))
+        log_log_plot(path, &format!("{label} vs time (log-log)"), "time (s)", label, &series)
     }
 
     fn html(&self, (cx, cy, cs): (usize, usize, usize)) -> String {
@@ -274,6 +222,91 @@ td:first-child, th:first-child {{ text-align: left; }}
 }
 
 /// A tick label with 3 significant digits (log axes make values like 0.30000000000000004).
+
+/// RMSE against the number of lights per pass, one line per method family (`vrl`,
+/// `vrl_lightcuts`, ...), for results of one method at several light counts (`haze compare
+/// --lights-plot`). Methods without a light count (volpath) are left out.
+pub fn lights_plot(path: &Path, results: &[MethodResult], budget: f64) -> Result<()> {
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for r in results {
+        let Some(lights) = r.spec.light_count() else { continue };
+        let name = r.spec.to_string();
+        let family = name.split(':').next().unwrap_or(&name).to_string();
+        let point = (lights as f64, r.metrics.rmse);
+        match series.iter_mut().find(|(f, _)| *f == family) {
+            Some((_, pts)) => pts.push(point),
+            None => series.push((family, vec![point])),
+        }
+    }
+    for (_, pts) in &mut series {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let title = format!("RMSE vs lights per pass, {budget} s each (log-log)");
+    log_log_plot(path, &title, "lights per pass", "RMSE", &series)
+}
+
+/// A log-log line plot (SVG) of named series; points that are not positive and finite are left out.
+/// plotters labels a log axis at the powers of its base inside the range only: an axis spanning
+/// less than a decade would have no labels in base 10, so it uses base 2 (`log_base`).
+fn log_log_plot(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<()> {
+    let pts: Vec<Vec<(f64, f64)>> = series
+        .iter()
+        .map(|(_, p)| {
+            p.iter().copied().filter(|&(x, y)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()).collect()
+        })
+        .collect();
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in pts.iter().flatten() {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if x0 > x1 {
+        (x0, x1, y0, y1) = (0.1, 1.0, 0.1, 1.0);
+    }
+    let draw = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = SVGBackend::new(path, (640, 420)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (x0 * 0.8..x1 * 1.25).log_scale().base(log_base(x0, x1)),
+                (y0 * 0.8..y1 * 1.25).log_scale().base(log_base(y0, y1)),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .x_label_formatter(&|v| significant(*v))
+            .y_label_formatter(&|v| significant(*v))
+            .draw()?;
+        for (i, ((name, _), p)) in series.iter().zip(&pts).enumerate() {
+            let color = PALETTE[i % PALETTE.len()].to_rgba();
+            chart
+                .draw_series(LineSeries::new(p.iter().copied(), color.stroke_width(2)))?
+                .label(name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            chart.draw_series(p.iter().map(|&xy| Circle::new(xy, 3, color.filled())))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()?;
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| anyhow!("drawing {}: {e}", path.display()))
+}
+
 fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");

@@ -69,7 +69,7 @@ fn compare_writes_table_images_and_report() {
     let methods = ["volpath", "vrl:200", "vrl_lightcuts:1k,epsilon=0.05", "vpl_lightcuts:2k"];
     let mut args = vec!["compare".to_string(), s(&scene), "--reference".into(), s(&reference)];
     args.extend(["--time", "0.3", "-o"].map(String::from));
-    args.extend([s(&out), "--report".into(), s(&report)]);
+    args.extend([s(&out), "--report".into(), s(&report), "--lights-plot".into(), s(&dir.join("lights.svg"))]);
     for m in methods {
         args.extend(["--method".to_string(), m.to_string()]);
     }
@@ -108,6 +108,11 @@ fn compare_writes_table_images_and_report() {
     // base in range would have none (see report::log_base).
     let labels = svg.matches("text-anchor=\"end\"").count();
     assert!(labels >= 2, "the RMSE axis has tick labels: {labels}");
+    let lights = std::fs::read_to_string(dir.join("lights.svg")).unwrap();
+    for family in ["vrl_lightcuts", "vpl_lightcuts", "lights per pass"] {
+        assert!(lights.contains(family), "the RMSE-vs-lights plot names {family}");
+    }
+    assert!(!lights.contains(">volpath<"), "volpath has no light count");
     assert!(html.contains("document.body.dataset.images"), "the page marks whether its images loaded");
     std::fs::remove_dir_all(&dir).ok();
 }
