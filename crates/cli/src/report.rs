@@ -221,8 +221,6 @@ td:first-child, th:first-child {{ text-align: left; }}
     }
 }
 
-/// A tick label with 3 significant digits (log axes make values like 0.30000000000000004).
-
 /// RMSE against the number of lights per pass, one line per method family (`vrl`,
 /// `vrl_lightcuts`, ...), for results of one method at several light counts (`haze compare
 /// --lights-plot`). Methods without a light count (volpath) are left out.
@@ -307,6 +305,7 @@ fn log_log_plot(
     draw().map_err(|e| anyhow!("drawing {}: {e}", path.display()))
 }
 
+/// A tick label with 3 significant digits (log axes make values like 0.30000000000000004).
 fn significant(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
