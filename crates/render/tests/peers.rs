@@ -166,7 +166,6 @@ fn suite(scene: &str) {
 }
 
 #[test]
-#[ignore = "haze is 1.3% too dark, locally up to 20-40% near the angled_cube.obj area light (image-mean z about -10); cause not found yet (issue 8)"]
 fn homo_area_light() {
     suite("test_homo_area_light_volpath");
 }
@@ -202,7 +201,6 @@ fn homo_spectral_sigmat() {
 }
 
 #[test]
-#[ignore = "haze is 1-2% too dark, locally up to 20-40% near the angled_cube.obj area light (image-mean z about -10); cause not found yet (issue 8)"]
 fn surf_area_light() {
     suite("test_surf_area_light_volpath");
 }
