@@ -22,7 +22,10 @@ fn component(name: Option<&str>) -> PyResult<Option<Component>> {
         Some(c) => Ok(Some(c)),
         None => {
             let names: Vec<_> = Component::ALL.iter().map(|c| c.name()).collect();
-            Err(PyValueError::new_err(format!("unknown component '{name}' (available: {})", names.join(", "))))
+            Err(PyValueError::new_err(format!(
+                "unknown component '{name}' (available: {})",
+                names.join(", ")
+            )))
         }
     }
 }
@@ -97,7 +100,11 @@ impl Film {
         let components = match stride {
             6 => false,
             30 => true,
-            _ => return Err(PyValueError::new_err(format!("sums must have 6 or 30 values per pixel, got {stride}"))),
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "sums must have 6 or 30 values per pixel, got {stride}"
+                )))
+            }
         };
         let data = sums.as_array().iter().copied().collect();
         let film = haze_engine::render::Film::from_raw(w as u32, h as u32, components, data, samples)
@@ -126,7 +133,10 @@ impl Film {
 /// passes `first .. first + count`, as (start, end) pairs: each is a node of the pass tree.
 #[pyfunction]
 pub fn pass_blocks(first: u32, count: u32, max_block: u32) -> Vec<(u32, u32)> {
-    engine_pass_blocks(first..first.saturating_add(count), max_block).into_iter().map(|r| (r.start, r.end)).collect()
+    engine_pass_blocks(first..first.saturating_add(count), max_block)
+        .into_iter()
+        .map(|r| (r.start, r.end))
+        .collect()
 }
 
 /// Merges the films of pass blocks `(start, end, film)` (from `pass_blocks`, each rendered by

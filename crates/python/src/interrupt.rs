@@ -39,7 +39,9 @@ pub fn run<T: Send>(py: Python<'_>, work: impl FnOnce(&AtomicBool) -> T + Send) 
                     }
                 }
                 Err(mpsc::RecvTimeoutError::Disconnected) => {
-                    return Err(PyRuntimeError::new_err("internal error: the render thread ended without a result"))
+                    return Err(PyRuntimeError::new_err(
+                        "internal error: the render thread ended without a result",
+                    ))
                 }
             }
         };

@@ -11,8 +11,8 @@ mod film;
 mod interrupt;
 mod scene;
 
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use haze_engine::render::image_io::RgbImage;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyException, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -104,13 +104,13 @@ fn trace_lights<'py>(
     d.set_item("vrl_length", PyArray1::from_iter(py, vrls.iter().map(|r| r.len)))?;
     d.set_item("vrl_flux", vec3(vrls.iter().map(|r| r.beta.0).collect())?)?;
     d.set_item("vrl_ratio", vec3(vrls.iter().map(|r| r.ratio.0).collect())?)?;
-    d.set_item("vrl_medium", PyArray1::from_iter(py, vrls.iter().map(|r| r.medium as u32)))?;
+    d.set_item("vrl_medium", PyArray1::from_iter(py, vrls.iter().map(|r| r.medium)))?;
     d.set_item("vrl_after_surface", PyArray1::from_iter(py, vrls.iter().map(|r| r.after_surface)))?;
     let vpls = &set.vpls;
     d.set_item("vpl_position", vec3(vpls.iter().map(|r| r.p.to_array()).collect())?)?;
     d.set_item("vpl_direction", vec3(vpls.iter().map(|r| r.d_in.to_array()).collect())?)?;
     d.set_item("vpl_flux", vec3(vpls.iter().map(|r| r.flux.0).collect())?)?;
-    d.set_item("vpl_medium", PyArray1::from_iter(py, vpls.iter().map(|r| r.medium as u32)))?;
+    d.set_item("vpl_medium", PyArray1::from_iter(py, vpls.iter().map(|r| r.medium)))?;
     d.set_item("vpl_after_surface", PyArray1::from_iter(py, vpls.iter().map(|r| r.after_surface)))?;
     d.set_item("paths", set.paths)?;
     Ok(d)
@@ -119,7 +119,8 @@ fn trace_lights<'py>(
 /// Reads a linear-RGB OpenEXR image as a float32 array of shape (H, W, 3).
 #[pyfunction]
 fn read_exr<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyAny>> {
-    let img = RgbImage::read_exr(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
+    let img =
+        RgbImage::read_exr(&path).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))?;
     Ok(PyArray1::from_vec(py, img.data).reshape([img.height, img.width, 3])?.into_any())
 }
 
@@ -129,7 +130,8 @@ fn rgb_image(image: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<RgbImage> {
     if shape.len() != 3 || shape[2] != 3 {
         return Err(PyValueError::new_err(format!("images must have shape (H, W, 3), got {shape:?}")));
     }
-    let data = image.as_slice().map_err(|_| PyValueError::new_err("images must be C-contiguous float32 arrays"))?;
+    let data =
+        image.as_slice().map_err(|_| PyValueError::new_err("images must be C-contiguous float32 arrays"))?;
     Ok(RgbImage::new(shape[1], shape[0], data.to_vec()))
 }
 
