@@ -3,12 +3,17 @@
 //!
 //! - [`methods`]: an integrator chosen by name (`volpath`, `vrl`, `vpl`, `vrl_lightcuts`,
 //!   `vpl_lightcuts`) with its options, and rendering with it.
+//! - [`passes`]: rendering a range of passes and merging ranges rendered elsewhere, bit for bit
+//!   (the pass tree).
+//! - [`lights`]: the virtual lights of one pass.
 //!
 //! The crates below stay the place for the science: `haze-scene` (loader, scene model),
 //! `haze-render` (film, progressive passes, volpath, metrics), `haze-manylight` (virtual lights,
 //! light tree, lightcuts).
 
+pub mod lights;
 pub mod methods;
+pub mod passes;
 
 pub use haze_core as core;
 pub use haze_manylight as manylight;

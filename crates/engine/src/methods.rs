@@ -30,6 +30,64 @@ impl Default for MethodOptions {
     }
 }
 
+impl MethodOptions {
+    /// The options every front end offers, validated: about `vrls` VRLs per pass or exactly
+    /// `light_paths` light paths (not both; default 10000 VRLs), and the lightcut `epsilon`
+    /// (default 0.02). The rest keep their defaults.
+    pub fn new(vrls: Option<u64>, light_paths: Option<u64>, epsilon: Option<f32>) -> Result<Self> {
+        let budget = match (vrls, light_paths) {
+            (Some(_), Some(_)) => bail!("give either vrls or light_paths, not both"),
+            (Some(0), _) => bail!("vrls must be at least 1"),
+            (_, Some(0)) => bail!("light_paths must be at least 1"),
+            (Some(n), None) => LightBudget::Vrls(n),
+            (None, Some(n)) => LightBudget::Paths(n),
+            (None, None) => LightBudget::Vrls(10_000),
+        };
+        let mut options = MethodOptions { budget, ..Default::default() };
+        if let Some(e) = epsilon {
+            if !(e.is_finite() && e >= 0.0) {
+                bail!("epsilon must be a number >= 0, got {e}");
+            }
+            options.lightcuts.cut.epsilon = e;
+        }
+        Ok(options)
+    }
+}
+
+/// Render settings from a front end's arguments, validated: `spp` samples per pixel (default:
+/// the scene's `sample_count`) or `time` seconds (not both).
+pub fn render_settings(
+    scene: &Scene,
+    spp: Option<u32>,
+    time: Option<f64>,
+    seed: u64,
+    spp_per_pass: u32,
+    components: bool,
+) -> Result<RenderSettings> {
+    if spp.is_some() && time.is_some() {
+        bail!("give either spp or time, not both");
+    }
+    if spp == Some(0) {
+        bail!("spp must be at least 1");
+    }
+    if let Some(t) = time {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("time must be a positive number of seconds, got {t}");
+        }
+    }
+    if spp_per_pass == 0 {
+        bail!("spp_per_pass must be at least 1");
+    }
+    Ok(RenderSettings {
+        spp: if time.is_some() { 0 } else { spp.unwrap_or(scene.spp) },
+        time_limit: time.map(std::time::Duration::from_secs_f64),
+        seed,
+        spp_per_pass,
+        components,
+        first_pass: 0,
+    })
+}
+
 /// A ready-to-render integrator of any kind.
 pub enum Method {
     VolPath(VolPath),
@@ -101,5 +159,20 @@ impl Method {
             Method::Lightcuts(i) => Some(i.cut_statistics().0),
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options_are_validated() {
+        assert_eq!(MethodOptions::new(None, None, None).unwrap().budget, LightBudget::Vrls(10_000));
+        assert_eq!(MethodOptions::new(None, Some(7), None).unwrap().budget, LightBudget::Paths(7));
+        assert_eq!(MethodOptions::new(None, None, Some(0.1)).unwrap().lightcuts.cut.epsilon, 0.1);
+        assert!(MethodOptions::new(Some(1), Some(1), None).is_err());
+        assert!(MethodOptions::new(Some(0), None, None).is_err());
+        assert!(MethodOptions::new(None, None, Some(f32::NAN)).is_err());
     }
 }

@@ -38,6 +38,32 @@ impl Film {
         self.layers * 6
     }
 
+    /// Rebuilds a film from the raw buffer of [`Self::data`] (e.g. sent by another process):
+    /// row-major pixels of [`Self::stride`] values each (per layer 3 sums, then 3 squared sums).
+    pub fn from_raw(
+        width: u32,
+        height: u32,
+        components: bool,
+        data: Vec<f64>,
+        samples: u64,
+    ) -> Result<Self, String> {
+        let film = Film { width, height, layers: if components { 5 } else { 1 }, data, samples };
+        let expected = width as usize * height as usize * film.stride();
+        if film.data.len() != expected {
+            return Err(format!(
+                "a {width}x{height} film{} holds {expected} values, got {}",
+                if components { " with components" } else { "" },
+                film.data.len()
+            ));
+        }
+        Ok(film)
+    }
+
+    /// The raw accumulation buffer (see [`Self::from_raw`]).
+    pub fn data(&self) -> &[f64] {
+        &self.data
+    }
+
     /// The raw accumulation buffer, for parallel per-row updates.
     pub fn data_mut(&mut self) -> &mut [f64] {
         &mut self.data
@@ -142,5 +168,23 @@ impl Film {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn raw_buffer_round_trips_and_sizes_are_checked() {
+        let mut film = Film::new(3, 2, true);
+        let mut r = PathRadiance::default();
+        r.add(Component::Single, Rgb([1.0, 2.0, 3.0]));
+        Film::add_sample(&mut film.data_mut()[..30], &r);
+        film.samples = 1;
+        let back = Film::from_raw(3, 2, true, film.data().to_vec(), 1).unwrap();
+        assert_eq!(back.mean(Some(Component::Single)), film.mean(Some(Component::Single)));
+        assert_eq!(back.mean(None)[..3], [1.0, 2.0, 3.0]);
+        assert!(Film::from_raw(3, 2, false, film.data().to_vec(), 1).is_err());
     }
 }

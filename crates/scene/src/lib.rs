@@ -24,4 +24,4 @@ pub use medium::{Medium, MediumId};
 pub use scene::{IntegratorSpec, Scene, SurfaceInteraction};
 pub use shape::{Geometry, Shape, TriangleMesh};
 pub use texture::Texture;
-pub use xml::{load_file, load_str, LoadError, LoadOptions};
+pub use xml::{load_file, load_file_with_sources, load_str, LoadError, LoadOptions};

@@ -306,3 +306,31 @@ fn mesh_files_with_normals_and_flipped_tex_coords() {
     assert!(plain.normals.is_none());
     assert!(plain.uvs.unwrap().iter().any(|uv| uv.x == 0.0 && uv.y == 0.0));
 }
+
+/// `load_file_with_sources` lists the main file, its includes and its mesh files, each once
+/// (a mesh used twice is listed once): what a worker on another machine needs.
+#[test]
+fn sources_list_every_file_read() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("xml-sources");
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    std::fs::write(dir.join("parts/quad.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        dir.join("parts/camera.xml"),
+        r#"<scene version="3.0.0"><sensor type="perspective"/></scene>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("main.xml"),
+        r#"<scene version="3.0.0">
+            <include filename="parts/camera.xml"/>
+            <shape type="obj"><string name="filename" value="parts/quad.obj"/></shape>
+            <shape type="obj"><string name="filename" value="parts/quad.obj"/></shape>
+        </scene>"#,
+    )
+    .unwrap();
+    let main = dir.join("main.xml");
+    let (s, files) =
+        haze_scene::load_file_with_sources(&main, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 2);
+    assert_eq!(files, vec![main.clone(), dir.join("parts/camera.xml"), dir.join("parts/quad.obj")]);
+}

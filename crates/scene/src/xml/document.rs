@@ -6,6 +6,7 @@
 //! Each element remembers its file and position so that later errors can say where.
 
 use super::LoadError;
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -27,6 +28,9 @@ pub(super) struct Document {
     /// Where relative file names are looked up, in order: the main file's directory, then the
     /// `<path value=".."/>` directories (Mitsuba 3's file resolver).
     pub search_dirs: Vec<PathBuf>,
+    /// Every file read or resolved so far besides the main file (includes, then meshes and
+    /// images as the builder resolves them), for shipping a scene to other machines.
+    pub files: RefCell<Vec<PathBuf>>,
 }
 
 impl Document {
@@ -35,7 +39,9 @@ impl Document {
     /// of the file `el` is in. A name found nowhere resolves to its first candidate, for the
     /// error message.
     pub fn resolve(&self, name: &str, el: &Element) -> PathBuf {
-        resolve_in(&self.search_dirs, name, el)
+        let path = resolve_in(&self.search_dirs, name, el);
+        self.files.borrow_mut().push(path.clone());
+        path
     }
 }
 
@@ -123,6 +129,7 @@ pub(super) fn parse(
         next_uid: 0,
         include_stack: Vec::new(),
         search_dirs: vec![base_dir.to_path_buf()],
+        files: Vec::new(),
     };
     let source = Rc::new(Source { file: file_name.to_path_buf(), dir: base_dir.to_path_buf() });
     let doc = parse_xml(xml, &source.file)?;
@@ -133,7 +140,7 @@ pub(super) fn parse(
     }
     check_version(&scene)?;
     ctx.fill(&doc, root, &source, true, &mut scene)?;
-    Ok(Document { root: scene, search_dirs: ctx.search_dirs })
+    Ok(Document { root: scene, search_dirs: ctx.search_dirs, files: RefCell::new(ctx.files) })
 }
 
 /// Mitsuba 3 reads files of format versions 2.x and 3.x (older ones it upgrades, which we do
@@ -176,6 +183,8 @@ struct Context {
     next_uid: usize,
     include_stack: Vec<PathBuf>,
     search_dirs: Vec<PathBuf>,
+    /// Included files, in the order they were read.
+    files: Vec<PathBuf>,
 }
 
 impl Context {
@@ -284,6 +293,7 @@ impl Context {
         }
         let xml = std::fs::read_to_string(&path)
             .map_err(|e| el.error(format!("cannot read '{}': {e}", path.display())))?;
+        self.files.push(path.clone());
         let source = Rc::new(Source {
             file: path.clone(),
             dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),

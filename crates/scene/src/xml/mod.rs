@@ -98,6 +98,35 @@ pub fn load_str(
     base_dir: &Path,
     options: &LoadOptions,
 ) -> Result<Scene, LoadError> {
+    load_str_with_sources(xml, file_name, base_dir, options).map(|(scene, _)| scene)
+}
+
+/// [`load_file`], also returning every file the scene read: `path` first, then its includes,
+/// mesh files and images, each once, in the order they were first read. This is what another
+/// machine needs to load the same scene (the Python package ships these files to Ray workers).
+pub fn load_file_with_sources(
+    path: &Path,
+    options: &LoadOptions,
+) -> Result<(Scene, Vec<PathBuf>), LoadError> {
+    let xml = std::fs::read_to_string(path)
+        .map_err(|e| LoadError::whole_file(path, format!("cannot read scene file: {e}")))?;
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    load_str_with_sources(&xml, path, base_dir, options)
+}
+
+fn load_str_with_sources(
+    xml: &str,
+    file_name: &Path,
+    base_dir: &Path,
+    options: &LoadOptions,
+) -> Result<(Scene, Vec<PathBuf>), LoadError> {
     let doc = document::parse(xml, file_name, base_dir, &options.defines)?;
-    builder::build(&doc, file_name)
+    let scene = builder::build(&doc, file_name)?;
+    let mut files = vec![file_name.to_path_buf()];
+    for f in doc.files.into_inner() {
+        if !files.contains(&f) {
+            files.push(f);
+        }
+    }
+    Ok((scene, files))
 }

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The whole test suite, as the README gives it and CI runs it (after fmt and clippy):
+#   1. the Rust workspace (cargo test --workspace);
+#   2. the Python package: a venv in .venv with the pinned tools (python/requirements-dev.txt),
+#      the extension built into it by maturin, then pytest python/tests (Ray tests included).
+# Needs: a Rust toolchain and python3 (3.9+, with venv). The tests read ../shared/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+start=$(date +%s)
+cargo test --workspace
+rust_done=$(date +%s)
+
+if [ ! -x .venv/bin/python ]; then
+  python3 -m venv .venv
+fi
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -r python/requirements-dev.txt
+# maturin installs into the venv named by VIRTUAL_ENV.
+VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --quiet
+# The metrics test compares with the `haze` command that cargo test built.
+export HAZE_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/haze"
+.venv/bin/python -m pytest python/tests
+end=$(date +%s)
+echo "test.sh: Rust $((rust_done - start)) s, Python (venv, build, pytest) $((end - rust_done)) s"
