@@ -108,7 +108,7 @@ mod tests {
             Vec3::new(x1, y, 1.0),
             Vec3::new(x0, y, 1.0),
         ];
-        // Counter-clockwise seen from above gives a -y normal ((p1 - p0) x (p2 - p0) = -y).
+        // `[0, 1, 2]`: `(p1 - p0) x (p2 - p0)` is along `x cross z = -y`.
         let indices = if up { vec![[0, 2, 1], [0, 3, 2]] } else { vec![[0, 1, 2], [0, 2, 3]] };
         Shape {
             name: name.into(),
