@@ -30,6 +30,12 @@ pub struct BenchArgs {
     /// lightcuts: measure cut sizes up to this many VRLs (larger counts: build time only).
     #[arg(long, default_value_t = 1_000_000)]
     pub max_cut_vrls: u64,
+    /// lightcuts: only the build times (no cut sizes, no frame times).
+    #[arg(long)]
+    pub build_only: bool,
+    /// lightcuts: PLOC search radius of the agglomerative builder (default: the builder's).
+    #[arg(long)]
+    pub ploc_radius: Option<usize>,
 }
 
 /// Mitsuba 3.9.1 `llvm_ad_rgb` volpath on the validation scenes on the same 2-core machine
@@ -65,9 +71,18 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         let scene = load_scene(path, &[])?;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
-        println!("\n### {file}\n");
-        println!("| VRLs | builder | threads | build s | ns per N log2 N | mean cut (eps 0.02, 1 spp) | segments at max-cut |");
-        println!("|---|---|---|---|---|---|---|");
+        let defaults = BuildSettings::default();
+        let build_settings =
+            BuildSettings { radius: args.ploc_radius.unwrap_or(defaults.radius), ..defaults };
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!(
+            "\n### {file} (PLOC radius {}, groups of {}; load average {})\n",
+            build_settings.radius,
+            build_settings.group_size,
+            load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+        );
+        println!("| VRLs | builder | threads | build s | CPU s | ns per N log2 N | tree cost | mean cut (eps 0.02, 1 spp) | segments at max-cut |");
+        println!("|---|---|---|---|---|---|---|---|---|");
         for n in [10_000u64, 100_000, 1_000_000] {
             let paths = paths_for_vrl_count(&scene, n, 0, &trace)?;
             let set = trace_light_paths(&scene, paths, 0, 0, &trace)?;
@@ -89,21 +104,24 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             for builder in ["agglomerative", "median"] {
                 for threads in [1usize, rayon::current_num_threads()] {
                     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-                    let t0 = Instant::now();
+                    let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
                     let tree = pool.install(|| match builder {
-                        "agglomerative" => build_agglomerative(&lights, &BuildSettings::default()),
+                        "agglomerative" => build_agglomerative(&lights, &build_settings),
                         _ => build_median_split(&lights, 0),
                     });
                     let secs = t0.elapsed().as_secs_f64();
+                    let cpu =
+                        cpu0.zip(process_cpu_seconds()).map_or("-".into(), |(a, b)| format!("{:.2}", b - a));
                     assert_eq!(tree.nodes.len(), 2 * lights.len() - 1);
                     // Cut sizes with this builder (1 spp frame), measured once per builder.
-                    let cut = if threads == 1 && n <= args.max_cut_vrls {
+                    let cut = if threads == 1 && n <= args.max_cut_vrls && !args.build_only {
                         let lc = LightcutSettings {
                             builder: if builder == "median" {
                                 Builder::MedianSplit
                             } else {
                                 Builder::Agglomerative
                             },
+                            build: build_settings,
                             ..Default::default()
                         };
                         let ml =
@@ -117,14 +135,18 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
                         ("-".into(), "-".into())
                     };
                     println!(
-                        "| {} | {builder} | {threads} | {secs:.3} | {:.1} | {} | {} |",
+                        "| {} | {builder} | {threads} | {secs:.3} | {cpu} | {:.1} | {:.2} | {} | {} |",
                         lights.len(),
                         secs * 1e9 / (nn * nn.log2()),
+                        tree_cost(&tree),
                         cut.0,
                         cut.1
                     );
                 }
             }
+        }
+        if args.build_only {
+            continue;
         }
         // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
         let time_of = |integ: &dyn Fn() -> Result<f64>| integ();
@@ -158,6 +180,25 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The quantity the agglomerative builder greedily minimises, summed over the tree:
+/// `sum_internal I(node) diag(node)^2 / (I(root) diag(root)^2)` (lower is a tighter tree).
+fn tree_cost(tree: &haze_manylight::tree::LightTree) -> f64 {
+    let cost = |n: &haze_manylight::tree::Node| n.intensity as f64 * (n.bounds.diagonal() as f64).powi(2);
+    let total: f64 = tree.nodes.iter().filter(|n| !n.is_leaf()).map(cost).sum();
+    total / cost(&tree.nodes[tree.root as usize]).max(1e-300)
+}
+
+/// CPU time (user + system) of this process so far, from `/proc/self/stat` (Linux; 10 ms
+/// ticks). Beside wall time it shows how much of a timing another load on the cores took.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 /// VRL evaluations per second: one evaluation is one camera segment x one VRL, with its

@@ -55,6 +55,33 @@ fn trees_satisfy_their_invariants() {
     assert!(build_agglomerative::<LightSummary>(&[], &BuildSettings::default()).is_empty());
 }
 
+/// Same seed, same tree, whatever the number of threads (groups are built in parallel; the
+/// representatives' choice hashes the seed and the children's representatives).
+#[test]
+fn agglomerative_tree_does_not_depend_on_thread_count() {
+    let mut s = Sampler::from_seed(9);
+    let m = medium(0.0);
+    let vrls = random_vrls(&mut s, 20_000, Vec3::ZERO, 4.0, 1.0);
+    let lights: Vec<LightSummary> = vrls.iter().map(|v| LightSummary::vrl(v, &m)).collect();
+    let settings = BuildSettings { group_size: 256, radius: 16, seed: 4 };
+    let trees: Vec<_> = [1usize, 2, 3]
+        .iter()
+        .map(|&t| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().expect("thread pool");
+            pool.install(|| build_agglomerative(&lights, &settings))
+        })
+        .collect();
+    for t in &trees[1..] {
+        assert_eq!(t.root, trees[0].root);
+        assert_eq!(t.nodes.len(), trees[0].nodes.len());
+        for (a, b) in t.nodes.iter().zip(&trees[0].nodes) {
+            assert_eq!((a.left, a.right, a.rep, a.count), (b.left, b.right, b.rep, b.count));
+            assert_eq!(a.bounds, b.bounds);
+        }
+    }
+    trees[0].check(&lights).expect("invariants");
+}
+
 /// The check itself must be able to fail.
 #[test]
 fn invariant_check_catches_a_broken_tree() {
