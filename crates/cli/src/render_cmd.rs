@@ -61,6 +61,11 @@ pub struct RenderArgs {
     /// Lightcuts: tree builder, `agglomerative` (the paper's 3-step parallel build) or `median`.
     #[arg(long, default_value = "agglomerative")]
     pub builder: String,
+    /// Lightcuts: also write a PNG heat map of the mean cut size per pixel (one extra 1-spp
+    /// pass with the same seed). Colour scale linear from 0 (black) to --max-cut (pale yellow,
+    /// "inferno" colours); a legend strip below the map shows it, ticks at every quarter.
+    #[arg(long, value_name = "PNG")]
+    pub cut_image: Option<PathBuf>,
     /// Override a scene `<default>` parameter: -D name=value (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
@@ -187,6 +192,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene, &args.define)?;
     let name = args.integrator.clone().unwrap_or_else(|| scene.integrator.name.clone());
+    if args.cut_image.is_some() && !name.ends_with("_lightcuts") {
+        bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts), not '{name}'");
+    }
     let settings = RenderSettings {
         spp: if args.time.is_some() { 0 } else { args.spp.unwrap_or(scene.spp) },
         time_limit: args.time.map(Duration::from_secs_f64),
@@ -216,7 +224,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(s) = summary {
         eprintln!("{s}");
     }
-    report_and_write(&args, &scene, &name, &output)
+    report_and_write(&args, &scene, &name, &output)?;
+    if let Some(path) = &args.cut_image {
+        crate::cut_image::write(&method, &scene, args.seed, args.max_cut, path)?;
+    }
+    Ok(())
 }
 
 fn progress_bar(settings: &RenderSettings, quiet: bool) -> ProgressBar {

@@ -144,6 +144,9 @@ impl LightcutsIntegrator {
 
 thread_local! {
     static CUT_SCRATCH: RefCell<CutScratch> = RefCell::new(CutScratch::default());
+    /// Cut sizes summed and camera segments counted on this thread since [`CutSizeProbe`]
+    /// last reset them.
+    static CUT_TALLY: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
 }
 
 struct VrlOracle<'a> {
@@ -346,11 +349,50 @@ impl LightcutsIntegrator {
         if s.size == 0 {
             return;
         }
+        CUT_TALLY.with(|t| {
+            let (size, n) = t.get();
+            t.set((size + s.size as u64, n + 1));
+        });
         self.stats.segments.fetch_add(1, Ordering::Relaxed);
         self.stats.cut_total.fetch_add(s.size as u64, Ordering::Relaxed);
         self.stats.cut_max.fetch_max(s.size as u64, Ordering::Relaxed);
         if s.hit_max {
             self.stats.hit_max.fetch_add(1, Ordering::Relaxed);
         }
+    }
+}
+
+/// Renders the mean cut size over a camera path's segments instead of its radiance, in every
+/// channel of the `emitted` component (0 where the path meets no medium). Runs the wrapped
+/// integrator unchanged, so the cuts are those of the image with the same seed and pass.
+pub struct CutSizeProbe<'a>(pub &'a LightcutsIntegrator);
+
+impl Integrator for CutSizeProbe<'_> {
+    type PassData = LightcutPass;
+
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass {
+        self.0.begin_pass(scene, seed, pass)
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance {
+        CUT_TALLY.with(|t| t.set((0, 0)));
+        let _ = self.0.radiance(scene, pass, ray, medium, sampler);
+        let (size, n) = CUT_TALLY.with(|t| t.get());
+        let mut r = PathRadiance::default();
+        if n > 0 {
+            r.add(haze_render::Component::Emitted, Rgb::splat(size as f32 / n as f32));
+        }
+        r
     }
 }
