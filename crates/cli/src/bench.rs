@@ -30,6 +30,16 @@ pub struct BenchArgs {
     /// lightcuts: measure cut sizes up to this many VRLs (larger counts: build time only).
     #[arg(long, default_value_t = 1_000_000)]
     pub max_cut_vrls: u64,
+    /// lightcuts: most nodes per cut for the cut-size column (a large value shows the sizes the
+    /// error criterion alone asks for).
+    #[arg(long, default_value_t = 1000)]
+    pub max_cut: u32,
+    /// lightcuts: cluster bound for the cut-size column: paper, conservative or tight.
+    #[arg(long, default_value = "paper")]
+    pub bound: String,
+    /// Override a scene `<default>` parameter: -D name=value (e.g. -D res=48 for cheaper cuts).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
     /// lightcuts: only the build times (no cut sizes, no frame times).
     #[arg(long)]
     pub build_only: bool,
@@ -64,11 +74,19 @@ pub fn run(args: BenchArgs) -> Result<()> {
 fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
     use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
+    use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+    use haze_manylight::tree::cut::CutSettings;
     use haze_manylight::tree::lights::LightSummary;
     use haze_manylight::vrl::{Segment, Vrl};
+    let bound = match args.bound.as_str() {
+        "paper" => BoundKind::Paper,
+        "conservative" => BoundKind::Conservative,
+        "tight" => BoundKind::Tight,
+        other => anyhow::bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
+    };
     for path in scenes {
-        let scene = load_scene(path, &[])?;
+        let scene = load_scene(path, &args.define)?;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
         let defaults = BuildSettings::default();
@@ -76,13 +94,17 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             BuildSettings { radius: args.ploc_radius.unwrap_or(defaults.radius), ..defaults };
         let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
         println!(
-            "\n### {file} (PLOC radius {}, groups of {}; load average {})\n",
+            "\n### {file} ({}x{}; PLOC radius {}, groups of {}; cuts: bound {}, epsilon 0.02, max cut {}; load average {})\n",
+            scene.camera.width,
+            scene.camera.height,
             build_settings.radius,
             build_settings.group_size,
+            args.bound,
+            args.max_cut,
             load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
         );
-        println!("| VRLs | builder | threads | build s | CPU s | ns per N log2 N | tree cost | mean cut (eps 0.02, 1 spp) | segments at max-cut |");
-        println!("|---|---|---|---|---|---|---|---|---|");
+        println!("| VRLs | builder | threads | build s | CPU s | ns per N log2 N | tree cost | mean cut (1 spp) | segments at max-cut | cut s |");
+        println!("|---|---|---|---|---|---|---|---|---|---|");
         for n in [10_000u64, 100_000, 1_000_000] {
             let paths = paths_for_vrl_count(&scene, n, 0, &trace)?;
             let set = trace_light_paths(&scene, paths, 0, 0, &trace)?;
@@ -122,25 +144,32 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
                                 Builder::Agglomerative
                             },
                             build: build_settings,
+                            bound,
+                            cut: CutSettings { max_cut: args.max_cut, ..Default::default() },
                             ..Default::default()
                         };
                         let ml =
                             ManyLightSettings { budget: LightBudget::Paths(paths), trace: trace.clone() };
                         let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
                         let settings = RenderSettings { spp: 1, ..Default::default() };
-                        let _ = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+                        let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
                         let (mean, _, hit) = integ.cut_statistics();
-                        (format!("{mean:.1}"), format!("{:.1}%", 100.0 * hit))
+                        (
+                            format!("{mean:.1}"),
+                            format!("{:.1}%", 100.0 * hit),
+                            format!("{:.2}", out.elapsed.as_secs_f64()),
+                        )
                     } else {
-                        ("-".into(), "-".into())
+                        ("-".into(), "-".into(), "-".into())
                     };
                     println!(
-                        "| {} | {builder} | {threads} | {secs:.3} | {cpu} | {:.1} | {:.2} | {} | {} |",
+                        "| {} | {builder} | {threads} | {secs:.3} | {cpu} | {:.1} | {:.2} | {} | {} | {} |",
                         lights.len(),
                         secs * 1e9 / (nn * nn.log2()),
                         tree_cost(&tree),
                         cut.0,
-                        cut.1
+                        cut.1,
+                        cut.2
                     );
                 }
             }

@@ -55,7 +55,9 @@ pub struct RenderArgs {
     /// Lightcuts: most nodes in a cut.
     #[arg(long, default_value_t = 1000)]
     pub max_cut: u32,
-    /// Lightcuts: cluster bound, `paper` (Vibert et al. 2019) or `conservative`.
+    /// Lightcuts: cluster bound, `paper` (Vibert et al. 2019), `conservative`, or `tight`
+    /// (conservative, with the VRL integral bounded through the VRLs' directions: log(1/h)
+    /// instead of 1/h near the camera line; docs/lightcuts.md).
     #[arg(long, default_value = "paper")]
     pub bound: String,
     /// Lightcuts: tree builder, `agglomerative` (the paper's 3-step parallel build) or `median`.
@@ -143,7 +145,8 @@ pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
     let bound = match args.bound.as_str() {
         "paper" => BoundKind::Paper,
         "conservative" => BoundKind::Conservative,
-        other => bail!("--bound must be 'paper' or 'conservative', got '{other}'"),
+        "tight" => BoundKind::Tight,
+        other => bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
     };
     let builder = match args.builder.as_str() {
         "agglomerative" => Builder::Agglomerative,

@@ -13,6 +13,7 @@ use crate::camera::CameraSegment;
 use crate::lighttrace::{trace_light_paths, VplRecord, VrlRecord};
 use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+use crate::tree::cone::{node_cones, LineCone};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
 use crate::tree::lights::LightSummary;
 use crate::tree::{LightTree, Node};
@@ -87,6 +88,8 @@ pub struct LightcutsIntegrator {
 pub struct Forest<L> {
     lights: Vec<L>,
     tree: LightTree,
+    /// Cones of the VRLs' directions per node (`--bound tight` only; empty otherwise).
+    cones: Vec<LineCone>,
 }
 
 pub struct LightcutPass {
@@ -122,7 +125,7 @@ impl LightcutsIntegrator {
             Builder::Agglomerative => build_agglomerative(&summaries, &build),
             Builder::MedianSplit => build_median_split(&summaries, seed),
         };
-        Forest { lights, tree }
+        Forest { lights, tree, cones: Vec::new() }
     }
 
     /// Mean and largest cut size per camera segment, and the fraction of segments that hit
@@ -152,6 +155,7 @@ thread_local! {
 struct VrlOracle<'a> {
     scene: &'a Scene,
     tree: &'a LightTree,
+    cones: &'a [LineCone],
     cs: &'a CameraSegment,
     cam_medium: &'a VrlMedium,
     lights: &'a [Vrl],
@@ -161,8 +165,8 @@ struct VrlOracle<'a> {
 }
 
 impl ClusterOracle for VrlOracle<'_> {
-    fn bound(&self, node: &Node) -> f32 {
-        self.bound.vrl_in_tree(self.tree, node, self.lights)
+    fn bound(&self, index: u32, _node: &Node) -> f32 {
+        self.bound.vrl_node(self.tree, index, self.lights, self.cones)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vrl = &self.lights[light as usize];
@@ -190,7 +194,7 @@ struct VplOracle<'a> {
 }
 
 impl ClusterOracle for VplOracle<'_> {
-    fn bound(&self, node: &Node) -> f32 {
+    fn bound(&self, _index: u32, node: &Node) -> f32 {
         self.bound.vpl_in_tree(self.tree, node, self.lights)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
@@ -226,15 +230,21 @@ impl Integrator for LightcutsIntegrator {
         let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
         fn empty<L>() -> [Forest<L>; 2] {
             [
-                Forest { lights: Vec::new(), tree: LightTree::default() },
-                Forest { lights: Vec::new(), tree: LightTree::default() },
+                Forest { lights: Vec::new(), tree: LightTree::default(), cones: Vec::new() },
+                Forest { lights: Vec::new(), tree: LightTree::default(), cones: Vec::new() },
             ]
         }
         let (vrls, vpls) = match self.kind {
             LightKind::Vrl => {
                 let [a, b] = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
                 let s = |v: &Vrl| LightSummary::vrl(v, &media[v.medium as usize]);
-                ([self.build(a, s, tree_seed), self.build(b, s, tree_seed ^ 1)], empty())
+                let mut forests = [self.build(a, s, tree_seed), self.build(b, s, tree_seed ^ 1)];
+                if self.settings.bound == BoundKind::Tight {
+                    for f in &mut forests {
+                        f.cones = node_cones(&f.tree, |i| f.lights[i as usize].seg.d);
+                    }
+                }
+                (forests, empty())
             }
             LightKind::Vpl => {
                 let [a, b] = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
@@ -289,6 +299,7 @@ impl Integrator for LightcutsIntegrator {
                     sigma_t_min: pass.sigma_t_min,
                     kind: self.settings.bound,
                     theta: self.settings.theta,
+                    camera_phase: cam_medium.phase,
                 };
                 let (value, stats) = match self.kind {
                     LightKind::Vrl => {
@@ -296,6 +307,7 @@ impl Integrator for LightcutsIntegrator {
                         let mut o = VrlOracle {
                             scene,
                             tree: &f.tree,
+                            cones: &f.cones,
                             cs,
                             cam_medium,
                             lights: &f.lights,

@@ -166,9 +166,10 @@ fn nearest_neighbours(c: &[Cluster], radius: usize, best: &mut [u32], best_d: &m
 fn rescan(c: &[Cluster], i: usize, radius: usize) -> (u32, f32) {
     let a = &c[i];
     let (mut b, mut bd) = (NONE, f32::INFINITY);
-    for j in i.saturating_sub(radius)..(i + radius + 1).min(c.len()) {
-        if j != i && c[j].alive() {
-            let d = cluster_metric(a, &c[j]);
+    let lo = i.saturating_sub(radius);
+    for (j, cj) in c.iter().enumerate().take((i + radius + 1).min(c.len())).skip(lo) {
+        if j != i && cj.alive() {
+            let d = cluster_metric(a, cj);
             if d < bd || (d == bd && (j as u32) < b) {
                 bd = d;
                 b = j as u32;
