@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 use haze_core::{Phase, Rgb, Sampler};
 use haze_manylight::tree::bound::{inverse_distance_integral, BoundContext, BoundKind, ThetaBound};
 use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
-use haze_manylight::tree::cone::node_cones;
+use haze_manylight::tree::cone::{node_cones, node_dir_cones};
 use haze_manylight::tree::lights::LightSummary;
 use haze_manylight::tree::Aabb;
 use haze_manylight::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
@@ -172,6 +172,7 @@ fn conservative_bound_is_never_exceeded() {
             kind,
             theta: ThetaBound::Exact,
             camera_phase: m.phase,
+            light_phase: Some(m.phase),
         };
         // Clusters of up to 8 VRLs use the VRLs' own distances (`vrl_in_tree`), which is what the
         // cut uses for them; both must hold.
@@ -183,8 +184,13 @@ fn conservative_bound_is_never_exceeded() {
         // The tight bound, through the VRLs themselves (clusters of at most 8, as in the cut)
         // and through the box and the cone of directions (what larger clusters use).
         let cones = node_cones(&tree, |i| vrls[i as usize].seg.d);
-        let b_tight = ctx(BoundKind::Tight).vrl_node(&tree, tree.root, &vrls, &cones);
-        let b_tight_box = ctx(BoundKind::Tight).vrl_box_and_cone(&root, &cones[tree.root as usize]);
+        let dir_cones = node_dir_cones(&tree, |i| vrls[i as usize].seg.d);
+        let b_tight = ctx(BoundKind::Tight).vrl_node(&tree, tree.root, &vrls, &cones, &dir_cones);
+        let b_tight_box = ctx(BoundKind::Tight).vrl_box_and_cone(
+            &root,
+            &cones[tree.root as usize],
+            &dir_cones[tree.root as usize],
+        );
         assert!(b_tight <= b_cons * (1.0 + 1e-4), "the tight bound is below the conservative one");
         assert!(b_tight_box <= b_box * (1.0 + 1e-4));
         if b_cons.is_finite() && b_cons > 0.0 {

@@ -13,7 +13,7 @@ use crate::camera::CameraSegment;
 use crate::lighttrace::{trace_light_paths, VplRecord, VrlRecord};
 use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
-use crate::tree::cone::{node_cones, LineCone};
+use crate::tree::cone::{node_cones, node_dir_cones, DirCone, LineCone};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
 use crate::tree::lights::LightSummary;
 use crate::tree::{LightTree, Node};
@@ -90,6 +90,7 @@ pub struct Forest<L> {
     tree: LightTree,
     /// Cones of the VRLs' directions per node (`--bound tight` only; empty otherwise).
     cones: Vec<LineCone>,
+    dir_cones: Vec<DirCone>,
 }
 
 pub struct LightcutPass {
@@ -98,6 +99,8 @@ pub struct LightcutPass {
     media: Vec<VrlMedium>,
     light_factor: Rgb,
     sigma_t_min: Rgb,
+    /// The phase every medium shares, if one (for the tight bound's light-side phase).
+    light_phase: Option<haze_core::Phase>,
 }
 
 impl LightcutsIntegrator {
@@ -125,7 +128,7 @@ impl LightcutsIntegrator {
             Builder::Agglomerative => build_agglomerative(&summaries, &build),
             Builder::MedianSplit => build_median_split(&summaries, seed),
         };
-        Forest { lights, tree, cones: Vec::new() }
+        Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new() }
     }
 
     /// Mean and largest cut size per camera segment, and the fraction of segments that hit
@@ -156,6 +159,7 @@ struct VrlOracle<'a> {
     scene: &'a Scene,
     tree: &'a LightTree,
     cones: &'a [LineCone],
+    dir_cones: &'a [DirCone],
     cs: &'a CameraSegment,
     cam_medium: &'a VrlMedium,
     lights: &'a [Vrl],
@@ -166,7 +170,7 @@ struct VrlOracle<'a> {
 
 impl ClusterOracle for VrlOracle<'_> {
     fn bound(&self, index: u32, _node: &Node) -> f32 {
-        self.bound.vrl_node(self.tree, index, self.lights, self.cones)
+        self.bound.vrl_node(self.tree, index, self.lights, self.cones, self.dir_cones)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vrl = &self.lights[light as usize];
@@ -230,8 +234,18 @@ impl Integrator for LightcutsIntegrator {
         let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
         fn empty<L>() -> [Forest<L>; 2] {
             [
-                Forest { lights: Vec::new(), tree: LightTree::default(), cones: Vec::new() },
-                Forest { lights: Vec::new(), tree: LightTree::default(), cones: Vec::new() },
+                Forest {
+                    lights: Vec::new(),
+                    tree: LightTree::default(),
+                    cones: Vec::new(),
+                    dir_cones: Vec::new(),
+                },
+                Forest {
+                    lights: Vec::new(),
+                    tree: LightTree::default(),
+                    cones: Vec::new(),
+                    dir_cones: Vec::new(),
+                },
             ]
         }
         let (vrls, vpls) = match self.kind {
@@ -242,6 +256,7 @@ impl Integrator for LightcutsIntegrator {
                 if self.settings.bound == BoundKind::Tight {
                     for f in &mut forests {
                         f.cones = node_cones(&f.tree, |i| f.lights[i as usize].seg.d);
+                        f.dir_cones = node_dir_cones(&f.tree, |i| f.lights[i as usize].seg.d);
                     }
                 }
                 (forests, empty())
@@ -278,7 +293,8 @@ impl Integrator for LightcutsIntegrator {
                 Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
             })
         };
-        LightcutPass { light_factor: light_factor(&media), vrls, vpls, media, sigma_t_min }
+        let light_phase = media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p));
+        LightcutPass { light_factor: light_factor(&media), vrls, vpls, media, sigma_t_min, light_phase }
     }
 
     fn radiance(
@@ -300,6 +316,7 @@ impl Integrator for LightcutsIntegrator {
                     kind: self.settings.bound,
                     theta: self.settings.theta,
                     camera_phase: cam_medium.phase,
+                    light_phase: pass.light_phase,
                 };
                 let (value, stats) = match self.kind {
                     LightKind::Vrl => {
@@ -308,6 +325,7 @@ impl Integrator for LightcutsIntegrator {
                             scene,
                             tree: &f.tree,
                             cones: &f.cones,
+                            dir_cones: &f.dir_cones,
                             cs,
                             cam_medium,
                             lights: &f.lights,

@@ -60,6 +60,9 @@ pub struct BoundContext {
     /// The camera medium's phase function ([`BoundKind::Tight`] bounds it over the directions
     /// from the segment to a node's box instead of taking its maximum).
     pub camera_phase: haze_core::Phase,
+    /// The phase function every light medium shares, if they share one ([`BoundKind::Tight`]
+    /// then bounds the light-side phase over the node's directions; `None`: its maximum).
+    pub light_phase: Option<haze_core::Phase>,
 }
 
 impl BoundContext {
@@ -260,13 +263,15 @@ impl BoundContext {
         index: u32,
         vrls: &[crate::vrl::Vrl],
         cones: &[super::cone::LineCone],
+        dir_cones: &[super::cone::DirCone],
     ) -> f32 {
         let node = &tree.nodes[index as usize];
         if self.kind != BoundKind::Tight {
             return self.vrl_in_tree(tree, node, vrls);
         }
+        let dir_cone = &dir_cones[index as usize];
         if node.count > EXACT_DISTANCE_MAX_COUNT {
-            return self.vrl_box_and_cone(node, &cones[index as usize]);
+            return self.vrl_box_and_cone(node, &cones[index as usize], dir_cone);
         }
         let (h_seg, integral) = {
             let (mut h_seg, mut integral) = (f32::INFINITY, 0.0f32);
@@ -283,20 +288,58 @@ impl BoundContext {
             return f32::INFINITY;
         }
         let h_line = distances(&self.seg, &node.bounds).1;
-        (self.common(node, h_seg) * integral * self.camera_phase_scale(node, h_line)).max_component()
+        let phases = self.camera_phase_scale(node, h_line) * self.light_phase_scale(node, dir_cone);
+        (self.common(node, h_seg) * integral * phases).max_component()
     }
 
     /// The tight bound of a VRL node from its box and its cone of directions:
     /// `Phi f T_r(h_seg) Theta_max I(L_max, s_min, h_line)` with [`inverse_distance_integral`],
     /// `s_min` from the cone and the camera phase bounded over the box
     /// ([`Self::camera_phase_scale`]).
-    pub fn vrl_box_and_cone(&self, node: &Node, cone: &super::cone::LineCone) -> f32 {
+    pub fn vrl_box_and_cone(
+        &self,
+        node: &Node,
+        cone: &super::cone::LineCone,
+        dir_cone: &super::cone::DirCone,
+    ) -> f32 {
         let (h_seg, h_line) = distances(&self.seg, &node.bounds);
         let integral = inverse_distance_integral(node.l_max, cone.min_sine(self.seg.d), h_line);
         if !integral.is_finite() {
             return f32::INFINITY;
         }
-        (self.common(node, h_seg) * integral * self.camera_phase_scale(node, h_line)).max_component()
+        let phases = self.camera_phase_scale(node, h_line) * self.light_phase_scale(node, dir_cone);
+        (self.common(node, h_seg) * integral * phases).max_component()
+    }
+
+    /// `max p_light / p_light max` over the node's VRL directions and the connections from its
+    /// box to the camera segment (1 unless every light medium shares one HG phase). The light
+    /// phase is evaluated at `cos = d_vrl . n`, `n = (y - x)/|y - x|` from the light point to the
+    /// camera point (estimator's `phase.eval(vrl.d, n)`). With the box and the segment in balls
+    /// `(c_b, r_b)` and `(c_s, r_s)` at distance `D > r_b + r_s`, every `y - x` lies in the ball
+    /// `(c_s - c_b, r_b + r_s)`, so `n` is within `beta = asin((r_b + r_s)/D)` of
+    /// `m = (c_s - c_b)/D`; `d_vrl` is within the cone's half-angle `alpha` of its axis, so the
+    /// angle between them is at least `angle(axis, m) - alpha - beta` (at most that plus, for
+    /// `g < 0`), and HG is monotone in `cos`.
+    fn light_phase_scale(&self, node: &Node, cone: &super::cone::DirCone) -> f32 {
+        let Some(phase @ haze_core::Phase::HenyeyGreenstein { g }) = self.light_phase else {
+            return 1.0;
+        };
+        let (cb, rb) = (node.bounds.center(), 0.5 * node.bounds.diagonal());
+        let rs = 0.5 * self.seg.len;
+        let m = self.seg.at(rs) - cb;
+        let dist = m.length();
+        let r = (rb + rs) * (1.0 + 1e-4) + 1e-6;
+        if dist <= r {
+            return 1.0;
+        }
+        let beta = (r / dist).asin() + 1e-4;
+        let phi = cone.axis.cross(m).length().atan2(cone.axis.dot(m));
+        let cos = if g > 0.0 {
+            (phi - cone.half_angle - beta).max(0.0).cos()
+        } else {
+            (phi + cone.half_angle + beta).min(std::f32::consts::PI).cos()
+        };
+        (haze_core::phase::hg(cos, g) / phase.max_value()).min(1.0)
     }
 
     /// `max p_cam / p_cam max` over the connections from the camera segment to the node's box

@@ -136,7 +136,7 @@ struct PlocScratch {
 const COMPACT_BELOW: f32 = 0.5;
 
 /// Best partner of every cluster (all alive) among `radius` neighbours on each side (ties to
-/// the lower index, so mutual pairs are found consistently). Every pair inside the window is
+/// the lower index, so mutual pairs are found consistently, as in [`rescan`]). Every pair inside the window is
 /// evaluated once and offered to both ends; candidates reach each cluster in increasing index
 /// order, as in [`rescan`].
 fn nearest_neighbours(c: &[Cluster], radius: usize, best: &mut [u32], best_d: &mut [f32]) {
@@ -148,12 +148,12 @@ fn nearest_neighbours(c: &[Cluster], radius: usize, best: &mut [u32], best_d: &m
         let (mut bi, mut bdi) = (best[i], best_d[i]);
         for j in i + 1..(i + radius + 1).min(n) {
             let d = cluster_metric(&a, &c[j]);
-            if d < bdi || (d == bdi && (j as u32) < bi) {
-                bdi = d;
-                bi = j as u32;
-            }
+            // Strict `<` with candidates in increasing index: ties go to the lower index.
+            let better = d < bdi;
+            bdi = if better { d } else { bdi };
+            bi = if better { j as u32 } else { bi };
             // Candidate `i` reaches `j` after every smaller index and before any larger one.
-            if d < best_d[j] || (d == best_d[j] && (i as u32) < best[j]) {
+            if d < best_d[j] {
                 best_d[j] = d;
                 best[j] = i as u32;
             }
@@ -163,19 +163,25 @@ fn nearest_neighbours(c: &[Cluster], radius: usize, best: &mut [u32], best_d: &m
     }
 }
 
-/// Best live partner of slot `i` within `radius` slots on each side.
+/// Best live partner of slot `i` within `radius` slots on each side. Candidates are scanned in
+/// increasing index with a strict `<`, so ties go to the lower index; dead slots have an
+/// infinite intensity, so their metric (`inf` or NaN) never wins, and the loop has no branch
+/// but the selects (the comparisons are unpredictable; branches cost more than the metric).
 fn rescan(c: &[Cluster], i: usize, radius: usize) -> (u32, f32) {
     let a = &c[i];
     let (mut b, mut bd) = (NONE, f32::INFINITY);
-    let lo = i.saturating_sub(radius);
-    for (j, cj) in c.iter().enumerate().take((i + radius + 1).min(c.len())).skip(lo) {
-        if j != i && cj.alive() {
-            let d = cluster_metric(a, cj);
-            if d < bd || (d == bd && (j as u32) < b) {
-                bd = d;
-                b = j as u32;
-            }
-        }
+    let (lo, hi) = (i.saturating_sub(radius), (i + radius + 1).min(c.len()));
+    for (j, cj) in c[lo..i].iter().enumerate() {
+        let d = cluster_metric(a, cj);
+        let better = d < bd;
+        bd = if better { d } else { bd };
+        b = if better { (lo + j) as u32 } else { b };
+    }
+    for (j, cj) in c[i + 1..hi].iter().enumerate() {
+        let d = cluster_metric(a, cj);
+        let better = d < bd;
+        bd = if better { d } else { bd };
+        b = if better { (i + 1 + j) as u32 } else { b };
     }
     (b, bd)
 }
@@ -241,6 +247,7 @@ fn ploc_with(nodes: &mut Vec<Node>, scratch: &mut PlocScratch, radius: usize, se
             let m = merge(&nodes[ia as usize], &nodes[ib as usize], ia, ib, seed);
             clusters[i as usize] = Cluster::of(&m, nodes.len() as u32);
             clusters[j as usize].node = NONE;
+            clusters[j as usize].intensity = f32::INFINITY;
             nodes.push(m);
         }
         live -= pairs.len();
