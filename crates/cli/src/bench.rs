@@ -63,7 +63,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
     match args.integrator.as_str() {
         "volpath" => bench_volpath(&args, &scenes),
         "vrl" => bench_vrl(&args, &scenes),
-        "lightcuts" => bench_lightcuts(&args, &scenes),
+        "lightcuts" => {
+            bench_lightcuts(&args, &scenes)?;
+            if args.scenes.is_empty() && !args.build_only {
+                cut_growth()?;
+            }
+            Ok(())
+        }
         other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
     }
 }
@@ -217,6 +223,47 @@ fn tree_cost(tree: &haze_manylight::tree::LightTree) -> f64 {
     let cost = |n: &haze_manylight::tree::Node| n.intensity as f64 * (n.bounds.diagonal() as f64).powi(2);
     let total: f64 = tree.nodes.iter().filter(|n| !n.is_leaf()).map(cost).sum();
     total / cost(&tree.nodes[tree.root as usize]).max(1e-300)
+}
+
+/// Mean cut size against the number of VRLs (10k, 100k, 1M) on a scene whose cuts converge
+/// below an unlimited cap (the smoke room, 32x32, 1 spp, epsilon 0.02), with the paper's and the
+/// tight bound: the "must grow sub-linearly". On the validation scenes every segment
+/// stops at the default cap of 1000, which says nothing about growth.
+fn cut_growth() -> Result<()> {
+    use haze_manylight::integrators::{LightKind, LightcutSettings, LightcutsIntegrator};
+    use haze_manylight::tree::bound::BoundKind;
+    use haze_manylight::tree::cut::CutSettings;
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/bench-smoke-room.xml");
+    let scene = load_scene(&path, &["res=32".to_string()])?;
+    let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "\n### mean cut size vs VRLs: bench-smoke-room.xml, 32x32, 1 spp, epsilon 0.02, no cut limit (load average {})\n",
+        load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    );
+    println!("| VRLs | mean cut, paper | cut/N | render s | mean cut, tight | cut/N | render s |");
+    println!("|---|---|---|---|---|---|---|");
+    for n in [10_000u64, 100_000, 1_000_000] {
+        let mut row = String::new();
+        let mut lights = 0.0;
+        for bound in [BoundKind::Paper, BoundKind::Tight] {
+            let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+            let lc = LightcutSettings {
+                bound,
+                cut: CutSettings { max_cut: u32::MAX, ..Default::default() },
+                ..Default::default()
+            };
+            let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+            let settings = RenderSettings { spp: 1, ..Default::default() };
+            let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+            let (mean, _, _) = integ.cut_statistics();
+            lights = integ.lights_per_pass();
+            row +=
+                &format!(" {mean:.0} | {:.4} | {:.2} |", mean / lights.max(1.0), out.elapsed.as_secs_f64());
+        }
+        println!("| {lights:.0} |{row}");
+    }
+    Ok(())
 }
 
 /// CPU time (user + system) of this process so far, from `/proc/self/stat` (Linux; 10 ms

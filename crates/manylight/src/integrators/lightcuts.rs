@@ -142,6 +142,12 @@ impl LightcutsIntegrator {
         )
     }
 
+    /// Lights per pass, averaged over the passes so far.
+    pub fn lights_per_pass(&self) -> f64 {
+        self.stats.lights.load(Ordering::Relaxed) as f64
+            / self.stats.passes.load(Ordering::Relaxed).max(1) as f64
+    }
+
     /// Seconds spent building trees, summed over passes.
     pub fn build_seconds(&self) -> f64 {
         self.stats.build_ns.load(Ordering::Relaxed) as f64 * 1e-9
