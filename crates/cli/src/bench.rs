@@ -30,6 +30,22 @@ pub struct BenchArgs {
     /// lightcuts: measure cut sizes up to this many VRLs (larger counts: build time only).
     #[arg(long, default_value_t = 1_000_000)]
     pub max_cut_vrls: u64,
+    /// lightcuts: most nodes per cut for the cut-size column (a large value shows the sizes the
+    /// error criterion alone asks for).
+    #[arg(long, default_value_t = 1000)]
+    pub max_cut: u32,
+    /// lightcuts: cluster bound for the cut-size column: paper, conservative or tight.
+    #[arg(long, default_value = "paper")]
+    pub bound: String,
+    /// Override a scene `<default>` parameter: -D name=value (e.g. -D res=48 for cheaper cuts).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
+    /// lightcuts: only the build times (no cut sizes, no frame times).
+    #[arg(long)]
+    pub build_only: bool,
+    /// lightcuts: PLOC search radius of the agglomerative builder (default: the builder's).
+    #[arg(long)]
+    pub ploc_radius: Option<usize>,
 }
 
 /// Mitsuba 3.9.1 `llvm_ad_rgb` volpath on the validation scenes on the same 2-core machine
@@ -47,7 +63,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
     match args.integrator.as_str() {
         "volpath" => bench_volpath(&args, &scenes),
         "vrl" => bench_vrl(&args, &scenes),
-        "lightcuts" => bench_lightcuts(&args, &scenes),
+        "lightcuts" => {
+            bench_lightcuts(&args, &scenes)?;
+            if args.scenes.is_empty() && !args.build_only {
+                cut_growth()?;
+            }
+            Ok(())
+        }
         other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
     }
 }
@@ -58,16 +80,37 @@ pub fn run(args: BenchArgs) -> Result<()> {
 fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
     use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
+    use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+    use haze_manylight::tree::cut::CutSettings;
     use haze_manylight::tree::lights::LightSummary;
     use haze_manylight::vrl::{Segment, Vrl};
+    let bound = match args.bound.as_str() {
+        "paper" => BoundKind::Paper,
+        "conservative" => BoundKind::Conservative,
+        "tight" => BoundKind::Tight,
+        other => anyhow::bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
+    };
     for path in scenes {
-        let scene = load_scene(path, &[])?;
+        let scene = load_scene(path, &args.define)?;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
-        println!("\n### {file}\n");
-        println!("| VRLs | builder | threads | build s | ns per N log2 N | mean cut (eps 0.02, 1 spp) | segments at max-cut |");
-        println!("|---|---|---|---|---|---|---|");
+        let defaults = BuildSettings::default();
+        let build_settings =
+            BuildSettings { radius: args.ploc_radius.unwrap_or(defaults.radius), ..defaults };
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!(
+            "\n### {file} ({}x{}; PLOC radius {}, groups of {}; cuts: bound {}, epsilon 0.02, max cut {}; load average {})\n",
+            scene.camera.width,
+            scene.camera.height,
+            build_settings.radius,
+            build_settings.group_size,
+            args.bound,
+            args.max_cut,
+            load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+        );
+        println!("| VRLs | builder | threads | build s | CPU s | ns per N log2 N | tree cost | mean cut (1 spp) | segments at max-cut | cut s |");
+        println!("|---|---|---|---|---|---|---|---|---|---|");
         for n in [10_000u64, 100_000, 1_000_000] {
             let paths = paths_for_vrl_count(&scene, n, 0, &trace)?;
             let set = trace_light_paths(&scene, paths, 0, 0, &trace)?;
@@ -89,42 +132,56 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             for builder in ["agglomerative", "median"] {
                 for threads in [1usize, rayon::current_num_threads()] {
                     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-                    let t0 = Instant::now();
+                    let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
                     let tree = pool.install(|| match builder {
-                        "agglomerative" => build_agglomerative(&lights, &BuildSettings::default()),
+                        "agglomerative" => build_agglomerative(&lights, &build_settings),
                         _ => build_median_split(&lights, 0),
                     });
                     let secs = t0.elapsed().as_secs_f64();
+                    let cpu =
+                        cpu0.zip(process_cpu_seconds()).map_or("-".into(), |(a, b)| format!("{:.2}", b - a));
                     assert_eq!(tree.nodes.len(), 2 * lights.len() - 1);
                     // Cut sizes with this builder (1 spp frame), measured once per builder.
-                    let cut = if threads == 1 && n <= args.max_cut_vrls {
+                    let cut = if threads == 1 && n <= args.max_cut_vrls && !args.build_only {
                         let lc = LightcutSettings {
                             builder: if builder == "median" {
                                 Builder::MedianSplit
                             } else {
                                 Builder::Agglomerative
                             },
+                            build: build_settings,
+                            bound,
+                            cut: CutSettings { max_cut: args.max_cut, ..Default::default() },
                             ..Default::default()
                         };
                         let ml =
                             ManyLightSettings { budget: LightBudget::Paths(paths), trace: trace.clone() };
                         let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
                         let settings = RenderSettings { spp: 1, ..Default::default() };
-                        let _ = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+                        let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
                         let (mean, _, hit) = integ.cut_statistics();
-                        (format!("{mean:.1}"), format!("{:.1}%", 100.0 * hit))
+                        (
+                            format!("{mean:.1}"),
+                            format!("{:.1}%", 100.0 * hit),
+                            format!("{:.2}", out.elapsed.as_secs_f64()),
+                        )
                     } else {
-                        ("-".into(), "-".into())
+                        ("-".into(), "-".into(), "-".into())
                     };
                     println!(
-                        "| {} | {builder} | {threads} | {secs:.3} | {:.1} | {} | {} |",
+                        "| {} | {builder} | {threads} | {secs:.3} | {cpu} | {:.1} | {:.2} | {} | {} | {} |",
                         lights.len(),
                         secs * 1e9 / (nn * nn.log2()),
+                        tree_cost(&tree),
                         cut.0,
-                        cut.1
+                        cut.1,
+                        cut.2
                     );
                 }
             }
+        }
+        if args.build_only {
+            continue;
         }
         // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
         let time_of = |integ: &dyn Fn() -> Result<f64>| integ();
@@ -158,6 +215,66 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The quantity the agglomerative builder greedily minimises, summed over the tree:
+/// `sum_internal I(node) diag(node)^2 / (I(root) diag(root)^2)` (lower is a tighter tree).
+fn tree_cost(tree: &haze_manylight::tree::LightTree) -> f64 {
+    let cost = |n: &haze_manylight::tree::Node| n.intensity as f64 * (n.bounds.diagonal() as f64).powi(2);
+    let total: f64 = tree.nodes.iter().filter(|n| !n.is_leaf()).map(cost).sum();
+    total / cost(&tree.nodes[tree.root as usize]).max(1e-300)
+}
+
+/// Mean cut size against the number of VRLs (10k, 100k, 1M) on a scene whose cuts converge
+/// below an unlimited cap (the smoke room, 32x32, 1 spp, epsilon 0.02), with the paper's and the
+/// tight bound: the "must grow sub-linearly". On the validation scenes every segment
+/// stops at the default cap of 1000, which says nothing about growth.
+fn cut_growth() -> Result<()> {
+    use haze_manylight::integrators::{LightKind, LightcutSettings, LightcutsIntegrator};
+    use haze_manylight::tree::bound::BoundKind;
+    use haze_manylight::tree::cut::CutSettings;
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/bench-smoke-room.xml");
+    let scene = load_scene(&path, &["res=32".to_string()])?;
+    let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "\n### mean cut size vs VRLs: bench-smoke-room.xml, 32x32, 1 spp, epsilon 0.02, no cut limit (load average {})\n",
+        load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    );
+    println!("| VRLs | mean cut, paper | cut/N | render s | mean cut, tight | cut/N | render s |");
+    println!("|---|---|---|---|---|---|---|");
+    for n in [10_000u64, 100_000, 1_000_000] {
+        let mut row = String::new();
+        let mut lights = 0.0;
+        for bound in [BoundKind::Paper, BoundKind::Tight] {
+            let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+            let lc = LightcutSettings {
+                bound,
+                cut: CutSettings { max_cut: u32::MAX, ..Default::default() },
+                ..Default::default()
+            };
+            let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+            let settings = RenderSettings { spp: 1, ..Default::default() };
+            let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+            let (mean, _, _) = integ.cut_statistics();
+            lights = integ.lights_per_pass();
+            row +=
+                &format!(" {mean:.0} | {:.4} | {:.2} |", mean / lights.max(1.0), out.elapsed.as_secs_f64());
+        }
+        println!("| {lights:.0} |{row}");
+    }
+    Ok(())
+}
+
+/// CPU time (user + system) of this process so far, from `/proc/self/stat` (Linux; 10 ms
+/// ticks). Beside wall time it shows how much of a timing another load on the cores took.
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 /// VRL evaluations per second: one evaluation is one camera segment x one VRL, with its

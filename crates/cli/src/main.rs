@@ -2,6 +2,7 @@
 
 mod bench;
 mod compare;
+mod cut_image;
 mod render_cmd;
 mod report;
 

@@ -55,12 +55,19 @@ pub struct RenderArgs {
     /// Lightcuts: most nodes in a cut.
     #[arg(long, default_value_t = 1000)]
     pub max_cut: u32,
-    /// Lightcuts: cluster bound, `paper` (Vibert et al. 2019) or `conservative`.
+    /// Lightcuts: cluster bound, `paper` (Vibert et al. 2019), `conservative`, or `tight`
+    /// (conservative, with the VRL integral bounded through the VRLs' directions: log(1/h)
+    /// instead of 1/h near the camera line; docs/lightcuts.md).
     #[arg(long, default_value = "paper")]
     pub bound: String,
     /// Lightcuts: tree builder, `agglomerative` (the paper's 3-step parallel build) or `median`.
     #[arg(long, default_value = "agglomerative")]
     pub builder: String,
+    /// Lightcuts: also write a PNG heat map of the mean cut size per pixel (one extra 1-spp
+    /// pass with the same seed). Colour scale linear from 0 (black) to --max-cut (pale yellow,
+    /// "inferno" colours); a legend strip below the map shows it, ticks at every quarter.
+    #[arg(long, value_name = "PNG")]
+    pub cut_image: Option<PathBuf>,
     /// Override a scene `<default>` parameter: -D name=value (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
@@ -138,7 +145,8 @@ pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
     let bound = match args.bound.as_str() {
         "paper" => BoundKind::Paper,
         "conservative" => BoundKind::Conservative,
-        other => bail!("--bound must be 'paper' or 'conservative', got '{other}'"),
+        "tight" => BoundKind::Tight,
+        other => bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
     };
     let builder = match args.builder.as_str() {
         "agglomerative" => Builder::Agglomerative,
@@ -187,6 +195,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene, &args.define)?;
     let name = args.integrator.clone().unwrap_or_else(|| scene.integrator.name.clone());
+    if args.cut_image.is_some() && !name.ends_with("_lightcuts") {
+        bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts), not '{name}'");
+    }
     let settings = RenderSettings {
         spp: if args.time.is_some() { 0 } else { args.spp.unwrap_or(scene.spp) },
         time_limit: args.time.map(Duration::from_secs_f64),
@@ -216,7 +227,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(s) = summary {
         eprintln!("{s}");
     }
-    report_and_write(&args, &scene, &name, &output)
+    report_and_write(&args, &scene, &name, &output)?;
+    if let Some(path) = &args.cut_image {
+        crate::cut_image::write(&method, &scene, args.seed, args.max_cut, path)?;
+    }
+    Ok(())
 }
 
 fn progress_bar(settings: &RenderSettings, quiet: bool) -> ProgressBar {

@@ -173,3 +173,55 @@ fn interrupt_writes_the_passes_finished_so_far() {
     let img = RgbImage::read_exr(&out).unwrap();
     assert!(img.data.iter().all(|v| v.is_finite()) && img.data.iter().any(|v| *v > 0.0));
 }
+
+/// `--cut-image`: a heat map with the image's width, the map's rows plus the legend strip,
+/// varying cut sizes; and a clear error for an integrator without cuts.
+#[test]
+fn cut_image_is_a_heat_map_of_the_image_size() {
+    let scene = repo("scenes/bench-smoke-room.xml");
+    let (out, map) = (tmp("cut.exr"), tmp("cut-map.png"));
+    let _ = std::fs::remove_file(&map);
+    let o = render(
+        &scene,
+        &out,
+        &[
+            "-D",
+            "res=24",
+            "--spp",
+            "1",
+            "--integrator",
+            "vrl_lightcuts",
+            "--vrls",
+            "3000",
+            "--cut-image",
+            map.to_str().unwrap(),
+        ],
+    );
+    assert!(stderr(&o).contains("colour scale 0 to 1000"), "{}", stderr(&o));
+    let img = image::open(&map).expect("cut image readable").to_rgb8();
+    // 24 rows of map and a legend strip of max(24 / 8, 4) = 4 rows.
+    assert_eq!((img.width(), img.height()), (24, 28));
+    let map_pixels: Vec<[u8; 3]> =
+        (0..24).flat_map(|y| (0..24).map(move |x| (x, y))).map(|(x, y)| img.get_pixel(x, y).0).collect();
+    let distinct: std::collections::HashSet<[u8; 3]> = map_pixels.iter().copied().collect();
+    assert!(distinct.len() > 3, "cut sizes do not vary: {distinct:?}");
+    // The legend runs from the scale's bottom colour (left) to its top colour (right).
+    assert_eq!(img.get_pixel(0, 27).0, [0, 0, 4]);
+    assert_eq!(img.get_pixel(23, 27).0, [252, 255, 164]);
+    let e = assert_clean_failure(
+        &haze(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "-D",
+            "res=8",
+            "--integrator",
+            "vrl",
+            "--cut-image",
+            map.to_str().unwrap(),
+        ]),
+        "cut image with vrl",
+    );
+    assert!(e.contains("--cut-image needs a lightcut integrator"), "{e}");
+}

@@ -100,3 +100,32 @@ fn default_epsilon_agrees_with_brute_force() {
     // gate only as a sanity check of gross bias (10%).
     assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");
 }
+
+/// `--bound tight` only changes which clusters the cut opens, never the estimate's expectation:
+/// on hg-box (HG phase, so the phase parts of the bound are active) its image agrees with
+/// `vrl` by the same z-test.
+#[test]
+fn tight_bound_agrees_with_brute_force() {
+    use haze_manylight::tree::bound::BoundKind;
+    let scene = load_small("hg-box", 24, 18);
+    let passes = 48;
+    let settings = LightcutSettings { bound: BoundKind::Tight, ..Default::default() };
+    let lc = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(&scene, 4000), settings, 5).unwrap();
+    let a = film(&scene, &lc, passes, 5);
+    let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 4000), 6).unwrap(), passes, 6);
+    let (w, h) = (24, 18);
+    let v = |f: &Film| -> Vec<f32> {
+        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
+            .iter()
+            .map(|x| x / f.samples as f32)
+            .collect()
+    };
+    let r =
+        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    println!("vrl_lightcuts (tight bound) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
+    assert!(r.failed_fraction() <= 0.01, "{r}");
+    assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");
+    // The cut must actually cut: fewer nodes than lights on average.
+    let (mean_cut, _, _) = lc.cut_statistics();
+    assert!(mean_cut < 0.9 * lc.lights_per_pass(), "cut {mean_cut} of {} lights", lc.lights_per_pass());
+}

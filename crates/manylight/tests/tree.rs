@@ -3,8 +3,9 @@
 
 use glam::{Vec2, Vec3};
 use haze_core::{Phase, Rgb, Sampler};
-use haze_manylight::tree::bound::{BoundContext, BoundKind, ThetaBound};
+use haze_manylight::tree::bound::{inverse_distance_integral, BoundContext, BoundKind, ThetaBound};
 use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+use haze_manylight::tree::cone::{node_cones, node_dir_cones};
 use haze_manylight::tree::lights::LightSummary;
 use haze_manylight::tree::Aabb;
 use haze_manylight::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
@@ -55,6 +56,33 @@ fn trees_satisfy_their_invariants() {
     assert!(build_agglomerative::<LightSummary>(&[], &BuildSettings::default()).is_empty());
 }
 
+/// Same seed, same tree, whatever the number of threads (groups are built in parallel; the
+/// representatives' choice hashes the seed and the children's representatives).
+#[test]
+fn agglomerative_tree_does_not_depend_on_thread_count() {
+    let mut s = Sampler::from_seed(9);
+    let m = medium(0.0);
+    let vrls = random_vrls(&mut s, 20_000, Vec3::ZERO, 4.0, 1.0);
+    let lights: Vec<LightSummary> = vrls.iter().map(|v| LightSummary::vrl(v, &m)).collect();
+    let settings = BuildSettings { group_size: 256, radius: 16, seed: 4 };
+    let trees: Vec<_> = [1usize, 2, 3]
+        .iter()
+        .map(|&t| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().expect("thread pool");
+            pool.install(|| build_agglomerative(&lights, &settings))
+        })
+        .collect();
+    for t in &trees[1..] {
+        assert_eq!(t.root, trees[0].root);
+        assert_eq!(t.nodes.len(), trees[0].nodes.len());
+        for (a, b) in t.nodes.iter().zip(&trees[0].nodes) {
+            assert_eq!((a.left, a.right, a.rep, a.count), (b.left, b.right, b.rep, b.count));
+            assert_eq!(a.bounds, b.bounds);
+        }
+    }
+    trees[0].check(&lights).expect("invariants");
+}
+
 /// The check itself must be able to fail.
 #[test]
 fn invariant_check_catches_a_broken_tree() {
@@ -97,6 +125,7 @@ fn conservative_bound_is_never_exceeded() {
     let (mut samples, mut paper_violations, mut conservative_violations) = (0u64, 0u64, 0u64);
     let mut worst_paper = 0.0f32;
     let mut tightest = 0.0f32;
+    let (mut tight_violations, mut tightest_tight, mut gain) = (0u64, 0.0f32, 1.0f32);
     for case in 0..400 {
         let g = [0.0, 0.7, -0.5][case % 3];
         let m = medium(g);
@@ -142,6 +171,8 @@ fn conservative_bound_is_never_exceeded() {
             sigma_t_min: m.sigma_t,
             kind,
             theta: ThetaBound::Exact,
+            camera_phase: m.phase,
+            light_phase: Some(m.phase),
         };
         // Clusters of up to 8 VRLs use the VRLs' own distances (`vrl_in_tree`), which is what the
         // cut uses for them; both must hold.
@@ -150,6 +181,21 @@ fn conservative_bound_is_never_exceeded() {
             ctx(BoundKind::Paper).vrl_in_tree(&tree, &root, &vrls),
         );
         let b_box = ctx(BoundKind::Conservative).vrl(&root);
+        // The tight bound, through the VRLs themselves (clusters of at most 8, as in the cut)
+        // and through the box and the cone of directions (what larger clusters use).
+        let cones = node_cones(&tree, |i| vrls[i as usize].seg.d);
+        let dir_cones = node_dir_cones(&tree, |i| vrls[i as usize].seg.d);
+        let b_tight = ctx(BoundKind::Tight).vrl_node(&tree, tree.root, &vrls, &cones, &dir_cones);
+        let b_tight_box = ctx(BoundKind::Tight).vrl_box_and_cone(
+            &root,
+            &cones[tree.root as usize],
+            &dir_cones[tree.root as usize],
+        );
+        assert!(b_tight <= b_cons * (1.0 + 1e-4), "the tight bound is below the conservative one");
+        assert!(b_tight_box <= b_box * (1.0 + 1e-4));
+        if b_cons.is_finite() && b_cons > 0.0 {
+            gain = gain.min(b_tight / b_cons);
+        }
         assert!(b_cons >= b_paper, "the conservative bound is the larger one");
         assert!(b_box >= b_cons * (1.0 - 1e-4), "distances to the VRLs are at least those to their box");
         for v in &vrls {
@@ -166,6 +212,15 @@ fn conservative_bound_is_never_exceeded() {
                     conservative_violations += 1;
                     eprintln!("case {case}: estimate {e} > conservative bound {b_cons}");
                 }
+                for (b, what) in [(b_tight, "tight"), (b_tight_box, "tight (box and cone)")] {
+                    if b.is_finite() {
+                        tightest_tight = tightest_tight.max(e / b);
+                    }
+                    if e > b * (1.0 + 1e-4) {
+                        tight_violations += 1;
+                        eprintln!("case {case}: estimate {e} > {what} bound {b}");
+                    }
+                }
                 if e > b_paper * (1.0 + 1e-4) {
                     paper_violations += 1;
                     worst_paper = worst_paper.max(e / b_paper);
@@ -179,7 +234,41 @@ fn conservative_bound_is_never_exceeded() {
     );
     // The bound is not vacuous: some samples come within a factor 100 of it.
     assert!(tightest > 0.01, "bound loose by more than 100x everywhere: {tightest}");
+    println!("tight bound exceeded {tight_violations} times; largest estimate/tight-bound ratio {tightest_tight:.3}");
+    println!("smallest tight/conservative bound ratio {gain:.4}");
+    assert!(tightest_tight >= tightest);
+    // Near the camera line (the nearly intersecting cases) the tight bound is much smaller.
+    assert!(gain < 0.2, "the tight bound never gains much: {gain}");
     assert_eq!(conservative_violations, 0);
+    assert_eq!(tight_violations, 0);
+}
+
+/// The integral bound against the exact integral of the sinh sampling,
+/// `(asinh(b s / h0) - asinh(a s / h0)) / s` for `h(v)^2 = h0^2 + s^2 v^2` on `[a, b]`, including
+/// intervals holding the closest point and nearly parallel lines.
+#[test]
+fn inverse_distance_integral_bounds_the_exact_one() {
+    let mut s = Sampler::from_seed(21);
+    let mut tightest = 0.0f64;
+    for _ in 0..100_000 {
+        let h0 = 10f64.powf(-4.0 + 4.0 * s.next_1d() as f64);
+        let sine = if s.next_1d() < 0.1 { 1e-4 * s.next_1d() as f64 } else { s.next_1d() as f64 };
+        let len = 2.0 * s.next_1d() as f64;
+        let a = (s.next_1d() as f64 - 0.7) * 2.0;
+        let b = a + len;
+        let exact =
+            if sine < 1e-9 { len / h0 } else { ((b * sine / h0).asinh() - (a * sine / h0).asinh()) / sine };
+        // The smallest distance along [a, b], which is what a box or segment distance gives.
+        let closest = if a <= 0.0 && b >= 0.0 { 0.0 } else { a.abs().min(b.abs()) };
+        let h_min = (h0 * h0 + sine * sine * closest * closest).sqrt();
+        let bound = inverse_distance_integral(len as f32, sine as f32, h_min as f32) as f64;
+        assert!(
+            exact <= bound * (1.0 + 1e-4),
+            "exact {exact} > bound {bound} (h0 {h0}, s {sine}, [{a}, {b}])"
+        );
+        tightest = tightest.max(exact / bound);
+    }
+    assert!(tightest > 0.9, "bound never close to the integral: {tightest}");
 }
 
 #[test]

@@ -13,6 +13,7 @@ use crate::camera::CameraSegment;
 use crate::lighttrace::{trace_light_paths, VplRecord, VrlRecord};
 use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+use crate::tree::cone::{node_cones, node_dir_cones, DirCone, LineCone};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
 use crate::tree::lights::LightSummary;
 use crate::tree::{LightTree, Node};
@@ -87,6 +88,9 @@ pub struct LightcutsIntegrator {
 pub struct Forest<L> {
     lights: Vec<L>,
     tree: LightTree,
+    /// Cones of the VRLs' directions per node (`--bound tight` only; empty otherwise).
+    cones: Vec<LineCone>,
+    dir_cones: Vec<DirCone>,
 }
 
 pub struct LightcutPass {
@@ -95,6 +99,8 @@ pub struct LightcutPass {
     media: Vec<VrlMedium>,
     light_factor: Rgb,
     sigma_t_min: Rgb,
+    /// The phase every medium shares, if one (for the tight bound's light-side phase).
+    light_phase: Option<haze_core::Phase>,
 }
 
 impl LightcutsIntegrator {
@@ -122,7 +128,7 @@ impl LightcutsIntegrator {
             Builder::Agglomerative => build_agglomerative(&summaries, &build),
             Builder::MedianSplit => build_median_split(&summaries, seed),
         };
-        Forest { lights, tree }
+        Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new() }
     }
 
     /// Mean and largest cut size per camera segment, and the fraction of segments that hit
@@ -136,6 +142,12 @@ impl LightcutsIntegrator {
         )
     }
 
+    /// Lights per pass, averaged over the passes so far.
+    pub fn lights_per_pass(&self) -> f64 {
+        self.stats.lights.load(Ordering::Relaxed) as f64
+            / self.stats.passes.load(Ordering::Relaxed).max(1) as f64
+    }
+
     /// Seconds spent building trees, summed over passes.
     pub fn build_seconds(&self) -> f64 {
         self.stats.build_ns.load(Ordering::Relaxed) as f64 * 1e-9
@@ -144,11 +156,16 @@ impl LightcutsIntegrator {
 
 thread_local! {
     static CUT_SCRATCH: RefCell<CutScratch> = RefCell::new(CutScratch::default());
+    /// Cut sizes summed and camera segments counted on this thread since [`CutSizeProbe`]
+    /// last reset them.
+    static CUT_TALLY: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
 }
 
 struct VrlOracle<'a> {
     scene: &'a Scene,
     tree: &'a LightTree,
+    cones: &'a [LineCone],
+    dir_cones: &'a [DirCone],
     cs: &'a CameraSegment,
     cam_medium: &'a VrlMedium,
     lights: &'a [Vrl],
@@ -158,8 +175,8 @@ struct VrlOracle<'a> {
 }
 
 impl ClusterOracle for VrlOracle<'_> {
-    fn bound(&self, node: &Node) -> f32 {
-        self.bound.vrl_in_tree(self.tree, node, self.lights)
+    fn bound(&self, index: u32, _node: &Node) -> f32 {
+        self.bound.vrl_node(self.tree, index, self.lights, self.cones, self.dir_cones)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vrl = &self.lights[light as usize];
@@ -187,7 +204,7 @@ struct VplOracle<'a> {
 }
 
 impl ClusterOracle for VplOracle<'_> {
-    fn bound(&self, node: &Node) -> f32 {
+    fn bound(&self, _index: u32, node: &Node) -> f32 {
         self.bound.vpl_in_tree(self.tree, node, self.lights)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
@@ -223,15 +240,32 @@ impl Integrator for LightcutsIntegrator {
         let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
         fn empty<L>() -> [Forest<L>; 2] {
             [
-                Forest { lights: Vec::new(), tree: LightTree::default() },
-                Forest { lights: Vec::new(), tree: LightTree::default() },
+                Forest {
+                    lights: Vec::new(),
+                    tree: LightTree::default(),
+                    cones: Vec::new(),
+                    dir_cones: Vec::new(),
+                },
+                Forest {
+                    lights: Vec::new(),
+                    tree: LightTree::default(),
+                    cones: Vec::new(),
+                    dir_cones: Vec::new(),
+                },
             ]
         }
         let (vrls, vpls) = match self.kind {
             LightKind::Vrl => {
                 let [a, b] = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
                 let s = |v: &Vrl| LightSummary::vrl(v, &media[v.medium as usize]);
-                ([self.build(a, s, tree_seed), self.build(b, s, tree_seed ^ 1)], empty())
+                let mut forests = [self.build(a, s, tree_seed), self.build(b, s, tree_seed ^ 1)];
+                if self.settings.bound == BoundKind::Tight {
+                    for f in &mut forests {
+                        f.cones = node_cones(&f.tree, |i| f.lights[i as usize].seg.d);
+                        f.dir_cones = node_dir_cones(&f.tree, |i| f.lights[i as usize].seg.d);
+                    }
+                }
+                (forests, empty())
             }
             LightKind::Vpl => {
                 let [a, b] = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
@@ -265,7 +299,8 @@ impl Integrator for LightcutsIntegrator {
                 Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
             })
         };
-        LightcutPass { light_factor: light_factor(&media), vrls, vpls, media, sigma_t_min }
+        let light_phase = media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p));
+        LightcutPass { light_factor: light_factor(&media), vrls, vpls, media, sigma_t_min, light_phase }
     }
 
     fn radiance(
@@ -286,6 +321,8 @@ impl Integrator for LightcutsIntegrator {
                     sigma_t_min: pass.sigma_t_min,
                     kind: self.settings.bound,
                     theta: self.settings.theta,
+                    camera_phase: cam_medium.phase,
+                    light_phase: pass.light_phase,
                 };
                 let (value, stats) = match self.kind {
                     LightKind::Vrl => {
@@ -293,6 +330,8 @@ impl Integrator for LightcutsIntegrator {
                         let mut o = VrlOracle {
                             scene,
                             tree: &f.tree,
+                            cones: &f.cones,
+                            dir_cones: &f.dir_cones,
                             cs,
                             cam_medium,
                             lights: &f.lights,
@@ -346,11 +385,50 @@ impl LightcutsIntegrator {
         if s.size == 0 {
             return;
         }
+        CUT_TALLY.with(|t| {
+            let (size, n) = t.get();
+            t.set((size + s.size as u64, n + 1));
+        });
         self.stats.segments.fetch_add(1, Ordering::Relaxed);
         self.stats.cut_total.fetch_add(s.size as u64, Ordering::Relaxed);
         self.stats.cut_max.fetch_max(s.size as u64, Ordering::Relaxed);
         if s.hit_max {
             self.stats.hit_max.fetch_add(1, Ordering::Relaxed);
         }
+    }
+}
+
+/// Renders the mean cut size over a camera path's segments instead of its radiance, in every
+/// channel of the `emitted` component (0 where the path meets no medium). Runs the wrapped
+/// integrator unchanged, so the cuts are those of the image with the same seed and pass.
+pub struct CutSizeProbe<'a>(pub &'a LightcutsIntegrator);
+
+impl Integrator for CutSizeProbe<'_> {
+    type PassData = LightcutPass;
+
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass {
+        self.0.begin_pass(scene, seed, pass)
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance {
+        CUT_TALLY.with(|t| t.set((0, 0)));
+        let _ = self.0.radiance(scene, pass, ray, medium, sampler);
+        let (size, n) = CUT_TALLY.with(|t| t.get());
+        let mut r = PathRadiance::default();
+        if n > 0 {
+            r.add(haze_render::Component::Emitted, Rgb::splat(size as f32 / n as f32));
+        }
+        r
     }
 }

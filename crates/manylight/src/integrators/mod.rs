@@ -7,7 +7,7 @@ mod lightcuts;
 mod vpl;
 mod vrl;
 
-pub use lightcuts::{Builder, LightKind, LightcutPass, LightcutSettings, LightcutsIntegrator};
+pub use lightcuts::{Builder, CutSizeProbe, LightKind, LightcutPass, LightcutSettings, LightcutsIntegrator};
 pub use vpl::VplIntegrator;
 pub use vrl::VrlIntegrator;
 

@@ -30,6 +30,10 @@ use haze_core::Rgb;
 pub enum BoundKind {
     Paper,
     Conservative,
+    /// Conservative, with `Int dv / h(v)` bounded through the VRLs' directions
+    /// ([`inverse_distance_integral`]): grows like `log(1/h)` instead of `1/h` near the camera
+    /// line. VPL clusters use the conservative bound.
+    Tight,
 }
 
 /// How `Theta_max` is bounded.
@@ -53,6 +57,12 @@ pub struct BoundContext {
     pub sigma_t_min: Rgb,
     pub kind: BoundKind,
     pub theta: ThetaBound,
+    /// The camera medium's phase function ([`BoundKind::Tight`] bounds it over the directions
+    /// from the segment to a node's box instead of taking its maximum).
+    pub camera_phase: haze_core::Phase,
+    /// The phase function every light medium shares, if they share one ([`BoundKind::Tight`]
+    /// then bounds the light-side phase over the node's directions; `None`: its maximum).
+    pub light_phase: Option<haze_core::Phase>,
 }
 
 impl BoundContext {
@@ -209,12 +219,171 @@ impl BoundContext {
     fn finish(&self, node: &Node, h_seg: f32, h_line: f32, length: f32) -> f32 {
         let h = match self.kind {
             BoundKind::Paper => h_seg,
-            BoundKind::Conservative => h_line,
+            BoundKind::Conservative | BoundKind::Tight => h_line,
         };
         if h <= 0.0 {
             return f32::INFINITY;
         }
         (self.common(node, h_seg) * (length / h)).max_component()
+    }
+}
+
+/// Upper bound of `Int_0^L dv / h(v)` over a VRL of length at most `l` whose distance to the
+/// camera's infinite line is `h(v)`, given `h(v) >= h` everywhere and `s` at most the sine of the
+/// angle between the VRL and the camera line.
+///
+/// `h(v)^2 = h0^2 + s^2 (v - v0)^2` (the perpendicular part of the VRL's points grows linearly
+/// with slope `s`), so `h(v) >= max(h, s |v - v0|)`. The integral of `1 / max(h, s |v - v0|)`
+/// over an interval of length `l` is largest with the interval centred on `v0`:
+/// `2 (h/s) / h + 2 Int_{h/s}^{l/2} dv / (s v) = (2/s) (1 + ln(l s / (2h)))` when `l s > 2h`,
+/// else `l / h`. This is the sinh sampling's `1/(h p(v)) = (asinh(b/h0) - asinh(a/h0)) / s`
+/// (notes §2) bounded without knowing `h0`: logarithmic in `1/h`, where the paper's `L/h` is
+/// linear. Non-increasing in `s` and `h`, non-decreasing in `l`.
+pub fn inverse_distance_integral(l: f32, s: f32, h: f32) -> f32 {
+    if h <= 0.0 {
+        return f32::INFINITY;
+    }
+    let x = l * s / (2.0 * h);
+    if x <= 1.0 {
+        l / h
+    } else {
+        (2.0 / s) * (1.0 + x.ln())
+    }
+}
+
+impl BoundContext {
+    /// The bound the cut uses for VRL node `index` (`node = tree.nodes[index]`): for
+    /// [`BoundKind::Tight`], `Phi f_max T_r(h_seg) Theta_max Int dv/h(v)` with the integral
+    /// bounded by [`inverse_distance_integral`] from the VRLs' own segment-to-line distances
+    /// and angles (clusters of at most [`EXACT_DISTANCE_MAX_COUNT`]) or from the box-to-line
+    /// distance, `L_max` and the node's cone of directions; otherwise [`Self::vrl_in_tree`].
+    pub fn vrl_node(
+        &self,
+        tree: &super::LightTree,
+        index: u32,
+        vrls: &[crate::vrl::Vrl],
+        cones: &[super::cone::LineCone],
+        dir_cones: &[super::cone::DirCone],
+    ) -> f32 {
+        let node = &tree.nodes[index as usize];
+        if self.kind != BoundKind::Tight {
+            return self.vrl_in_tree(tree, node, vrls);
+        }
+        let dir_cone = &dir_cones[index as usize];
+        if node.count > EXACT_DISTANCE_MAX_COUNT {
+            return self.vrl_box_and_cone(node, &cones[index as usize], dir_cone);
+        }
+        let (h_seg, integral) = {
+            let (mut h_seg, mut integral) = (f32::INFINITY, 0.0f32);
+            for_each_light(tree, node, |i| {
+                let v = &vrls[i as usize].seg;
+                h_seg = h_seg.min(segment_segment_distance(&self.seg, v));
+                let s = self.seg.d.cross(v.d).length();
+                integral =
+                    integral.max(inverse_distance_integral(v.len, s, line_segment_distance(&self.seg, v)));
+            });
+            (h_seg, integral)
+        };
+        if !integral.is_finite() {
+            return f32::INFINITY;
+        }
+        let h_line = distances(&self.seg, &node.bounds).1;
+        let phases = self.camera_phase_scale(node, h_line) * self.light_phase_scale(node, dir_cone);
+        (self.common(node, h_seg) * integral * phases).max_component()
+    }
+
+    /// The tight bound of a VRL node from its box and its cone of directions:
+    /// `Phi f T_r(h_seg) Theta_max I(L_max, s_min, h_line)` with [`inverse_distance_integral`],
+    /// `s_min` from the cone and the camera phase bounded over the box
+    /// ([`Self::camera_phase_scale`]).
+    pub fn vrl_box_and_cone(
+        &self,
+        node: &Node,
+        cone: &super::cone::LineCone,
+        dir_cone: &super::cone::DirCone,
+    ) -> f32 {
+        let (h_seg, h_line) = distances(&self.seg, &node.bounds);
+        let integral = inverse_distance_integral(node.l_max, cone.min_sine(self.seg.d), h_line);
+        if !integral.is_finite() {
+            return f32::INFINITY;
+        }
+        let phases = self.camera_phase_scale(node, h_line) * self.light_phase_scale(node, dir_cone);
+        (self.common(node, h_seg) * integral * phases).max_component()
+    }
+
+    /// `max p_light / p_light max` over the node's VRL directions and the connections from its
+    /// box to the camera segment (1 unless every light medium shares one HG phase). The light
+    /// phase is evaluated at `cos = d_vrl . n`, `n = (y - x)/|y - x|` from the light point to the
+    /// camera point (estimator's `phase.eval(vrl.d, n)`). With the box and the segment in balls
+    /// `(c_b, r_b)` and `(c_s, r_s)` at distance `D > r_b + r_s`, every `y - x` lies in the ball
+    /// `(c_s - c_b, r_b + r_s)`, so `n` is within `beta = asin((r_b + r_s)/D)` of
+    /// `m = (c_s - c_b)/D`; `d_vrl` is within the cone's half-angle `alpha` of its axis, so the
+    /// angle between them is at least `angle(axis, m) - alpha - beta` (at most that plus, for
+    /// `g < 0`), and HG is monotone in `cos`.
+    fn light_phase_scale(&self, node: &Node, cone: &super::cone::DirCone) -> f32 {
+        let Some(phase @ haze_core::Phase::HenyeyGreenstein { g }) = self.light_phase else {
+            return 1.0;
+        };
+        let (cb, rb) = (node.bounds.center(), 0.5 * node.bounds.diagonal());
+        let rs = 0.5 * self.seg.len;
+        let m = self.seg.at(rs) - cb;
+        let dist = m.length();
+        let r = (rb + rs) * (1.0 + 1e-4) + 1e-6;
+        if dist <= r {
+            return 1.0;
+        }
+        let beta = (r / dist).asin() + 1e-4;
+        let phi = cone.axis.cross(m).length().atan2(cone.axis.dot(m));
+        let cos = if g > 0.0 {
+            (phi - cone.half_angle - beta).max(0.0).cos()
+        } else {
+            (phi + cone.half_angle + beta).min(std::f32::consts::PI).cos()
+        };
+        (haze_core::phase::hg(cos, g) / phase.max_value()).min(1.0)
+    }
+
+    /// `max p_cam / p_cam max` over the connections from the camera segment to the node's box
+    /// (1 for the isotropic phase). The camera phase is evaluated at `cos = d . (x - y) / |x - y|`
+    /// (`y = o + u d` on the segment, `x` the light point; estimator's `phase.eval(n, -d)`).
+    /// Writing `x - y = a d + p` with `p` perpendicular to `d`: `|p| >= h_line` (box to camera
+    /// line) and `a` lies in `[min_box d.(x-o) - len, max_box d.(x-o)]`, so
+    /// `cos <= a_max / sqrt(a_max^2 + h_line^2)` if `a_max > 0` (else `cos <= 0`) and
+    /// `cos >= a_min / sqrt(a_min^2 + h_line^2)` if `a_min < 0` (else `cos >= 0`). HG is
+    /// monotone in `cos` (increasing for `g > 0`), so it is bounded at that end.
+    fn camera_phase_scale(&self, node: &Node, h_line: f32) -> f32 {
+        let haze_core::Phase::HenyeyGreenstein { g } = self.camera_phase else {
+            return 1.0;
+        };
+        let (d, o, b) = (self.seg.d, self.seg.o, &node.bounds);
+        let proj = |pick_max: bool| -> f32 {
+            (0..3)
+                .map(|k| {
+                    let (l, h) = (d[k] * b.lo[k], d[k] * b.hi[k]);
+                    if pick_max {
+                        l.max(h)
+                    } else {
+                        l.min(h)
+                    }
+                })
+                .sum::<f32>()
+                - d.dot(o)
+        };
+        let cos = if g > 0.0 {
+            let a = proj(true);
+            if a > 0.0 {
+                a / (a * a + h_line * h_line).sqrt()
+            } else {
+                0.0
+            }
+        } else {
+            let a = proj(false) - self.seg.len;
+            if a < 0.0 {
+                a / (a * a + h_line * h_line).sqrt()
+            } else {
+                0.0
+            }
+        };
+        (haze_core::phase::hg(cos, g) / self.camera_phase.max_value()).min(1.0)
     }
 }
 

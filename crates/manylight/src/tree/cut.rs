@@ -15,8 +15,9 @@ use std::collections::BinaryHeap;
 
 /// What the cut needs from a light kind: bounds of nodes and sampled contributions of lights.
 pub trait ClusterOracle {
-    /// Upper bound of the contribution of any light of `node` (largest channel).
-    fn bound(&self, node: &Node) -> f32;
+    /// Upper bound of the contribution of any light of node `index` (`node` is
+    /// `tree.nodes[index]`), largest channel.
+    fn bound(&self, index: u32, node: &Node) -> f32;
     /// One sampled contribution of light `light` to the current camera segment.
     fn contribution(&mut self, light: u32) -> Rgb;
 }
@@ -108,7 +109,12 @@ pub fn lightcut(
     let heap = &mut scratch.heap;
     heap.clear();
     let est = scaled(root, c);
-    heap.push(Entry { bound: oracle.bound(root), node: tree.root, contribution: c, estimate: est });
+    heap.push(Entry {
+        bound: oracle.bound(tree.root, root),
+        node: tree.root,
+        contribution: c,
+        estimate: est,
+    });
     let mut total = est;
     let mut leaf_sum = Rgb::ZERO;
     let mut leaves = 0u32;
@@ -133,7 +139,12 @@ pub fn lightcut(
                 leaf_sum += ce;
                 leaves += 1;
             } else {
-                heap.push(Entry { bound: oracle.bound(cn), node: child, contribution: cc, estimate: ce });
+                heap.push(Entry {
+                    bound: oracle.bound(child, cn),
+                    node: child,
+                    contribution: cc,
+                    estimate: ce,
+                });
             }
         }
     }

@@ -9,6 +9,7 @@
 
 pub mod bound;
 pub mod build;
+pub mod cone;
 pub mod cut;
 pub mod lights;
 
