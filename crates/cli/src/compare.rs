@@ -4,7 +4,8 @@ use crate::render_cmd::{load_scene, set_threads, RenderArgs};
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser};
 use haze_engine::methods::{Method, MethodOptions};
-use haze_manylight::integrators::LightBudget;
+use haze_manylight::integrators::{Builder, LightBudget};
+use haze_manylight::tree::bound::BoundKind;
 use haze_render::image_io::RgbImage;
 use haze_render::metrics::Metrics;
 use haze_render::progressive::RenderSettings;
@@ -18,7 +19,8 @@ use std::time::{Duration, Instant};
 /// Light count of a many-light method when the spec gives none (as `haze render`).
 const DEFAULT_LIGHTS: u64 = 10_000;
 
-/// One method of a comparison: `NAME[:LIGHTS][,epsilon=E][,max_cut=N]`, e.g. `volpath`,
+/// One method of a comparison: `NAME[:LIGHTS][,epsilon=E][,max_cut=N][,bound=B][,builder=T]`,
+/// e.g. `volpath`,
 /// `vrl:10000`, `vrl_lightcuts:100k,epsilon=0.01`, `vpl_lightcuts:1M`. `LIGHTS` is the number of
 /// virtual lights traced per pass (about; the light-path count is fixed from a pilot run); it
 /// accepts the suffixes `k` (x1000) and `M` (x1000000).
@@ -28,6 +30,10 @@ pub struct MethodSpec {
     pub lights: Option<u64>,
     pub epsilon: Option<f32>,
     pub max_cut: Option<u32>,
+    /// Lightcut bound name (`paper`, `conservative`, `tight`), kept as given for display.
+    pub bound: Option<String>,
+    /// Tree builder name (`agglomerative`, `median`).
+    pub builder: Option<String>,
 }
 
 impl MethodSpec {
@@ -55,6 +61,13 @@ impl MethodSpec {
         }
         if let Some(m) = self.max_cut {
             o.lightcuts.cut.max_cut = m;
+        }
+        // Validated when parsed (`FromStr for MethodSpec`).
+        if let Some(b) = self.bound.as_deref().and_then(|b| b.parse().ok()) {
+            o.lightcuts.bound = b;
+        }
+        if let Some(b) = self.builder.as_deref().and_then(|b| b.parse().ok()) {
+            o.lightcuts.builder = b;
         }
         o
     }
@@ -84,7 +97,14 @@ impl FromStr for MethodSpec {
         if !NAMES.contains(&name) {
             return Err(format!("unknown method '{name}' in '{s}' (available: {})", NAMES.join(", ")));
         }
-        let mut spec = MethodSpec { name: name.to_string(), lights: None, epsilon: None, max_cut: None };
+        let mut spec = MethodSpec {
+            name: name.to_string(),
+            lights: None,
+            epsilon: None,
+            max_cut: None,
+            bound: None,
+            builder: None,
+        };
         if let Some(l) = lights {
             if name == "volpath" {
                 return Err(format!("'{s}': volpath takes no light count"));
@@ -114,8 +134,18 @@ impl FromStr for MethodSpec {
                     Ok(m) if m > 0 => spec.max_cut = Some(m),
                     _ => return Err(format!("'{s}': max_cut must be a positive integer, got '{value}'")),
                 },
+                "bound" => match value.trim().parse::<BoundKind>() {
+                    Ok(_) => spec.bound = Some(value.trim().to_string()),
+                    Err(e) => return Err(format!("'{s}': {e}")),
+                },
+                "builder" => match value.trim().parse::<Builder>() {
+                    Ok(_) => spec.builder = Some(value.trim().to_string()),
+                    Err(e) => return Err(format!("'{s}': {e}")),
+                },
                 other => {
-                    return Err(format!("'{s}': unknown option '{other}' (available: epsilon, max_cut)"))
+                    return Err(format!(
+                        "'{s}': unknown option '{other}' (available: epsilon, max_cut, bound, builder)"
+                    ))
                 }
             }
         }
@@ -134,6 +164,12 @@ impl fmt::Display for MethodSpec {
         }
         if let Some(m) = self.max_cut {
             write!(f, ",max_cut={m}")?;
+        }
+        if let Some(b) = &self.bound {
+            write!(f, ",bound={b}")?;
+        }
+        if let Some(b) = &self.builder {
+            write!(f, ",builder={b}")?;
         }
         Ok(())
     }
@@ -440,7 +476,14 @@ mod tests {
     fn parses_the_paper_methods() {
         assert_eq!(
             spec("volpath"),
-            MethodSpec { name: "volpath".into(), lights: None, epsilon: None, max_cut: None }
+            MethodSpec {
+                name: "volpath".into(),
+                lights: None,
+                epsilon: None,
+                max_cut: None,
+                bound: None,
+                builder: None
+            }
         );
         assert_eq!(spec("vrl:10000").lights, Some(10_000));
         assert_eq!(spec("vrl_lightcuts:100k").lights, Some(100_000));
@@ -448,13 +491,22 @@ mod tests {
         assert_eq!(spec("vpl_lightcuts:1_000_000").lights, Some(1_000_000));
         let s = spec("vrl_lightcuts:100000,epsilon=0.01,max_cut=500");
         assert_eq!((s.epsilon, s.max_cut), (Some(0.01), Some(500)));
+        let s = spec("vrl_lightcuts:10k,bound=tight,builder=median");
+        let o = s.options();
+        assert_eq!((o.lightcuts.bound, o.lightcuts.builder), (BoundKind::Tight, Builder::MedianSplit));
         assert_eq!(spec("vrl").light_count(), Some(DEFAULT_LIGHTS));
         assert_eq!(spec("volpath").light_count(), None);
     }
 
     #[test]
     fn display_round_trips_and_names_files() {
-        for s in ["volpath", "vrl:10000", "vrl_lightcuts:100000,epsilon=0.01", "vpl_lightcuts:5,max_cut=7"] {
+        for s in [
+            "volpath",
+            "vrl:10000",
+            "vrl_lightcuts:100000,epsilon=0.01",
+            "vpl_lightcuts:5,max_cut=7",
+            "vrl_lightcuts:100,bound=conservative,builder=median",
+        ] {
             assert_eq!(spec(s).to_string(), s);
         }
         assert_eq!(spec("vrl_lightcuts:100000,epsilon=0.01").file_stem(), "vrl_lightcuts-100000_epsilon0.01");
@@ -470,6 +522,11 @@ mod tests {
             ("vrl:10,epsilon=0.1", "only to vrl_lightcuts"),
             ("vrl_lightcuts:10,epsilon=-1", "epsilon must be a number >= 0"),
             ("vrl_lightcuts:10,epsilon", "KEY=VALUE"),
+            (
+                "vrl_lightcuts:10,bound=loose",
+                "the bound must be 'paper', 'conservative' or 'tight', got 'loose'",
+            ),
+            ("vrl_lightcuts:10,builder=sah", "the builder must be 'agglomerative' or 'median', got 'sah'"),
             ("vrl_lightcuts:10,alpha=2", "unknown option 'alpha'"),
             ("vpl_lightcuts,max_cut=0", "max_cut must be a positive integer"),
         ] {

@@ -142,17 +142,8 @@ pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
     if args.max_cut == 0 {
         bail!("--max-cut must be at least 1");
     }
-    let bound = match args.bound.as_str() {
-        "paper" => BoundKind::Paper,
-        "conservative" => BoundKind::Conservative,
-        "tight" => BoundKind::Tight,
-        other => bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
-    };
-    let builder = match args.builder.as_str() {
-        "agglomerative" => Builder::Agglomerative,
-        "median" => Builder::MedianSplit,
-        other => bail!("--builder must be 'agglomerative' or 'median', got '{other}'"),
-    };
+    let bound: BoundKind = args.bound.parse().map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
+    let builder: Builder = args.builder.parse().map_err(|e| anyhow::anyhow!("--builder: {e}"))?;
     Ok(LightcutSettings {
         cut: CutSettings { epsilon: args.epsilon, max_cut: args.max_cut },
         bound,

@@ -36,6 +36,19 @@ pub enum Builder {
     MedianSplit,
 }
 
+impl std::str::FromStr for Builder {
+    type Err = String;
+
+    /// The names of `--builder`: `agglomerative`, `median`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "agglomerative" => Ok(Builder::Agglomerative),
+            "median" => Ok(Builder::MedianSplit),
+            other => Err(format!("the builder must be 'agglomerative' or 'median', got '{other}'")),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct LightcutSettings {
     pub cut: CutSettings,
