@@ -184,31 +184,11 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             continue;
         }
         // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
-        let time_of = |integ: &dyn Fn() -> Result<f64>| integ();
-        let lc_secs = time_of(&|| {
-            let ml = ManyLightSettings { budget: LightBudget::Vrls(100_000), trace: trace.clone() };
-            let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, LightcutSettings::default(), 0)?;
-            let out = render(
-                &scene,
-                &integ,
-                &RenderSettings { spp: 1, ..Default::default() },
-                &AtomicBool::new(false),
-                |_| {},
-            );
-            Ok(out.elapsed.as_secs_f64())
-        })?;
-        let vrl_secs = time_of(&|| {
-            let ml = ManyLightSettings { budget: LightBudget::Vrls(10_000), trace: trace.clone() };
-            let integ = VrlIntegrator::new(&scene, ml, 0)?;
-            let out = render(
-                &scene,
-                &integ,
-                &RenderSettings { spp: 1, ..Default::default() },
-                &AtomicBool::new(false),
-                |_| {},
-            );
-            Ok(out.elapsed.as_secs_f64())
-        })?;
+        let ml = |vrls| ManyLightSettings { budget: LightBudget::Vrls(vrls), trace: trace.clone() };
+        let lc =
+            LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(100_000), LightcutSettings::default(), 0)?;
+        let lc_secs = frame_seconds(&scene, &lc);
+        let vrl_secs = frame_seconds(&scene, &VrlIntegrator::new(&scene, ml(10_000), 0)?);
         println!(
             "\nframe at 1 spp: vrl_lightcuts (100k VRLs) {lc_secs:.2} s, vrl (10k VRLs) {vrl_secs:.2} s, ratio {:.2}",
             lc_secs / vrl_secs
@@ -344,4 +324,11 @@ fn bench_volpath(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Seconds of one frame at 1 spp with `integ`: its per-pass light tracing and tree build included,
+/// its construction (the pilot light-tracing run) not.
+fn frame_seconds(scene: &haze_scene::Scene, integ: &impl Integrator) -> f64 {
+    let settings = RenderSettings { spp: 1, ..Default::default() };
+    render(scene, integ, &settings, &AtomicBool::new(false), |_| {}).elapsed.as_secs_f64()
 }

@@ -139,34 +139,40 @@ fn tables(distr: Microfacet, eta: f32) -> (Vec<f32>, f32) {
 }
 
 /// Directional albedo of a rough dielectric interface's reflection at incidence cosine `mu`
-/// (Mitsuba's `eval_reflectance`): `∫ F(wi.m) G1(wo, m)` over the visible normals `m`, with
-/// Gauss-Legendre quadrature over the sampling square (32 points per axis for `eta > 1`,
-/// 128 for `eta < 1`, where total internal reflection makes the integrand rougher).
+/// (Mitsuba's `eval_reflectance`): `∫ F(wi.m) G1(wo, m)` over the visible normals `m`.
 fn rough_reflectance(distr: &Microfacet, mu: f32, eta: f32) -> f32 {
-    let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    let (nodes, weights) = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
-    let mut acc = 0.0f64;
-    for (x, wx) in nodes.iter().zip(&weights) {
-        for (y, wy) in nodes.iter().zip(&weights) {
-            let u = Vec2::new((0.5 * x + 0.5) as f32, (0.5 * y + 0.5) as f32);
-            let (m, _) = distr.sample(wi, u);
-            let wo = 2.0 * wi.dot(m) * m - wi;
-            if wo.z <= 0.0 {
-                continue;
-            }
-            let (f, _, _) = fresnel_dielectric(wi.dot(m), eta);
-            acc += (distr.smith_g1(wo, m) * f) as f64 * wx * wy;
+    visible_normal_integral(distr, mu, eta, |wi, m| {
+        let wo = 2.0 * wi.dot(m) * m - wi;
+        if wo.z <= 0.0 {
+            return 0.0;
         }
-    }
-    (acc * 0.25) as f32
+        let (f, _, _) = fresnel_dielectric(wi.dot(m), eta);
+        distr.smith_g1(wo, m) * f
+    })
 }
 
 /// Directional albedo of a rough dielectric interface's transmission at incidence cosine `mu`
 /// (Mitsuba's `eval_transmittance`, the table `roughplastic` weights its base by):
 /// `∫ (1 - F(wi.m)) G1(wt, m)` over the visible normals `m`, `wt` the direction refracted
-/// through `m`, with the same quadrature as [`rough_reflectance`]. Not `1 - R`: the masking of
-/// the refracted direction removes energy too, a few percent at grazing incidence.
+/// through `m`. Not `1 - R`: the masking of the refracted direction removes energy too, a few
+/// percent at grazing incidence.
 fn rough_transmittance(distr: &Microfacet, mu: f32, eta: f32) -> f32 {
+    visible_normal_integral(distr, mu, eta, |wi, m| {
+        let wi_m = wi.dot(m);
+        let (f, cos_t, eta_ti) = fresnel_dielectric(wi_m, eta);
+        let inv = 1.0 / eta_ti;
+        let wt = (m * (wi_m * inv + cos_t) - wi * inv).normalize();
+        if wt.z * wi.z >= 0.0 {
+            return 0.0;
+        }
+        distr.smith_g1(wt, m) * (1.0 - f)
+    })
+}
+
+/// `∫ g(wi, m)` over the visible normals `m` of `distr` seen from `wi` (incidence cosine `mu`),
+/// by Gauss-Legendre quadrature over the sampling square: 32 points per axis for `eta > 1`,
+/// 128 for `eta < 1`, where total internal reflection makes the integrand rougher.
+fn visible_normal_integral(distr: &Microfacet, mu: f32, eta: f32, g: impl Fn(Vec3, Vec3) -> f32) -> f32 {
     let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let (nodes, weights) = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
     let mut acc = 0.0f64;
@@ -174,14 +180,7 @@ fn rough_transmittance(distr: &Microfacet, mu: f32, eta: f32) -> f32 {
         for (y, wy) in nodes.iter().zip(&weights) {
             let u = Vec2::new((0.5 * x + 0.5) as f32, (0.5 * y + 0.5) as f32);
             let (m, _) = distr.sample(wi, u);
-            let wi_m = wi.dot(m);
-            let (f, cos_t, eta_ti) = fresnel_dielectric(wi_m, eta);
-            let inv = 1.0 / eta_ti;
-            let wt = (m * (wi_m * inv + cos_t) - wi * inv).normalize();
-            if wt.z * wi.z >= 0.0 {
-                continue;
-            }
-            acc += (distr.smith_g1(wt, m) * (1.0 - f)) as f64 * wx * wy;
+            acc += g(wi, m) as f64 * wx * wy;
         }
     }
     (acc * 0.25) as f32
