@@ -78,7 +78,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
 /// 100k and 1M VRLs traced in the scene), mean cut size against the number of VRLs, and the
 /// frame time of `vrl_lightcuts` with 100k VRLs against `vrl` with 10k VRLs at 1 spp.
 fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
-    use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
+    use haze_manylight::integrators::{Builder, CutStrategy, LightcutSettings, LightcutsIntegrator, Vrls};
     use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
     use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
@@ -152,11 +152,12 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
                             build: build_settings,
                             bound,
                             cut: CutSettings { max_cut: args.max_cut, ..Default::default() },
+                            strategy: CutStrategy::Bound,
                             ..Default::default()
                         };
                         let ml =
                             ManyLightSettings { budget: LightBudget::Paths(paths), trace: trace.clone() };
-                        let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+                        let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, 0)?;
                         let settings = RenderSettings { spp: 1, ..Default::default() };
                         let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
                         let (mean, _, hit) = integ.cut_statistics();
@@ -185,8 +186,7 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         }
         // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
         let ml = |vrls| ManyLightSettings { budget: LightBudget::Vrls(vrls), trace: trace.clone() };
-        let lc =
-            LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(100_000), LightcutSettings::default(), 0)?;
+        let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(100_000), LightcutSettings::default(), 0)?;
         let lc_secs = frame_seconds(&scene, &lc);
         let vrl_secs = frame_seconds(&scene, &VrlIntegrator::new(&scene, ml(10_000), 0)?);
         println!(
@@ -210,7 +210,7 @@ fn tree_cost(tree: &haze_manylight::tree::LightTree) -> f64 {
 /// tight bound: the "must grow sub-linearly". On the validation scenes every segment
 /// stops at the default cap of 1000, which says nothing about growth.
 fn cut_growth() -> Result<()> {
-    use haze_manylight::integrators::{LightKind, LightcutSettings, LightcutsIntegrator};
+    use haze_manylight::integrators::{CutStrategy, LightcutSettings, LightcutsIntegrator, Vrls};
     use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::cut::CutSettings;
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/bench-smoke-room.xml");
@@ -231,9 +231,10 @@ fn cut_growth() -> Result<()> {
             let lc = LightcutSettings {
                 bound,
                 cut: CutSettings { max_cut: u32::MAX, ..Default::default() },
+                strategy: CutStrategy::Bound,
                 ..Default::default()
             };
-            let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+            let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, 0)?;
             let settings = RenderSettings { spp: 1, ..Default::default() };
             let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
             let (mean, _, _) = integ.cut_statistics();

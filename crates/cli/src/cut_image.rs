@@ -34,11 +34,13 @@ pub fn legend_height(height: usize) -> usize {
 /// first pass) with `method`'s lightcuts integrator, recording the mean cut size per camera
 /// segment of each pixel, and writes the heat map to `path`.
 pub fn write(method: &Method, scene: &Scene, seed: u64, max_cut: u32, path: &Path) -> Result<()> {
-    let Method::Lightcuts(integrator) = method else {
-        anyhow::bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts)");
-    };
     let settings = RenderSettings { spp: 1, seed, ..Default::default() };
-    let out = render(scene, &CutSizeProbe(integrator), &settings, &AtomicBool::new(false), |_| {});
+    let cancel = AtomicBool::new(false);
+    let out = match method {
+        Method::VrlLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
+        Method::VplLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
+        _ => anyhow::bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts)"),
+    };
     let sizes: Vec<f32> = out.film.mean(None).chunks(3).map(|p| p[0]).collect();
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     let scale = max_cut.max(1) as f32;

@@ -3,9 +3,10 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use haze_engine::methods::{Method, MethodOptions};
-use haze_manylight::integrators::{Builder, LightBudget, LightcutSettings};
+use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings};
 use haze_manylight::tree::bound::BoundKind;
 use haze_manylight::tree::cut::CutSettings;
+use haze_manylight::tree::stochastic::StochasticSettings;
 use haze_render::image_io::RgbImage;
 use haze_render::progressive::{PassReport, RenderOutput, RenderSettings};
 use haze_render::Component;
@@ -48,6 +49,14 @@ pub struct RenderArgs {
     /// vpl: clamp the geometry term 1/w^2 at this value (biased; off by default).
     #[arg(long)]
     pub vpl_clamp: Option<f32>,
+    /// Lightcuts: how each camera segment's cut is chosen: `stochastic` (bound-free: a cut of
+    /// --cut-size nodes by importance, one light sampled in each; unbiased) or `bound` (the
+    /// paper's deterministic cut by upper bounds, with --epsilon, --max-cut and --bound).
+    #[arg(long, default_value = "stochastic")]
+    pub cut: String,
+    /// Lightcuts, stochastic cut: nodes per cut, i.e. lights sampled per camera segment.
+    #[arg(long)]
+    pub cut_size: Option<u32>,
     /// Lightcuts: refine a cut until every node's bound is at most epsilon times the cut's
     /// estimate (largest RGB channel of each).
     #[arg(long, default_value_t = 0.02)]
@@ -144,7 +153,17 @@ pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
     }
     let bound: BoundKind = args.bound.parse().map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
     let builder: Builder = args.builder.parse().map_err(|e| anyhow::anyhow!("--builder: {e}"))?;
+    let strategy: CutStrategy = args.cut.parse().map_err(|e| anyhow::anyhow!("--cut: {e}"))?;
+    let mut stochastic = StochasticSettings::default();
+    if let Some(k) = args.cut_size {
+        if k == 0 {
+            bail!("--cut-size must be at least 1");
+        }
+        stochastic.cut_size = k;
+    }
     Ok(LightcutSettings {
+        strategy,
+        stochastic,
         cut: CutSettings { epsilon: args.epsilon, max_cut: args.max_cut },
         bound,
         builder,

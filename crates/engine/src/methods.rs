@@ -3,8 +3,8 @@
 
 use anyhow::{bail, Result};
 use haze_manylight::integrators::{
-    surface_warning, LightBudget, LightKind, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
-    VplIntegrator, VrlIntegrator,
+    surface_warning, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, VplIntegrator,
+    Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -93,7 +93,8 @@ pub enum Method {
     VolPath(VolPath),
     Vrl(VrlIntegrator),
     Vpl(VplIntegrator),
-    Lightcuts(LightcutsIntegrator),
+    VrlLightcuts(LightcutsIntegrator<Vrls>),
+    VplLightcuts(LightcutsIntegrator<Vpls>),
 }
 
 impl Method {
@@ -118,10 +119,11 @@ impl Method {
             ),
             "vrl" => Method::Vrl(VrlIntegrator::new(scene, many_light(), seed)?),
             "vpl" => Method::Vpl(VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?),
-            "vrl_lightcuts" | "vpl_lightcuts" => {
-                let kind = if name == "vrl_lightcuts" { LightKind::Vrl } else { LightKind::Vpl };
-                let lc = options.lightcuts;
-                Method::Lightcuts(LightcutsIntegrator::new(scene, kind, many_light(), lc, seed)?)
+            "vrl_lightcuts" => {
+                Method::VrlLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
+            }
+            "vpl_lightcuts" => {
+                Method::VplLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
             }
             other => bail!("unknown integrator '{other}' (available: {METHOD_NAMES})"),
         })
@@ -139,7 +141,8 @@ impl Method {
             Method::VolPath(i) => render(scene, i, settings, cancel, on_pass),
             Method::Vrl(i) => render(scene, i, settings, cancel, on_pass),
             Method::Vpl(i) => render(scene, i, settings, cancel, on_pass),
-            Method::Lightcuts(i) => render(scene, i, settings, cancel, on_pass),
+            Method::VrlLightcuts(i) => render(scene, i, settings, cancel, on_pass),
+            Method::VplLightcuts(i) => render(scene, i, settings, cancel, on_pass),
         }
     }
 
@@ -149,14 +152,16 @@ impl Method {
             Method::VolPath(i) => i.summary(),
             Method::Vrl(i) => i.summary(),
             Method::Vpl(i) => i.summary(),
-            Method::Lightcuts(i) => i.summary(),
+            Method::VrlLightcuts(i) => i.summary(),
+            Method::VplLightcuts(i) => i.summary(),
         }
     }
 
     /// Mean number of nodes per cut (per camera segment), for lightcut methods.
     pub fn mean_cut_size(&self) -> Option<f64> {
         match self {
-            Method::Lightcuts(i) => Some(i.cut_statistics().0),
+            Method::VrlLightcuts(i) => Some(i.cut_statistics().0),
+            Method::VplLightcuts(i) => Some(i.cut_statistics().0),
             _ => None,
         }
     }

@@ -7,7 +7,10 @@ mod lightcuts;
 mod vpl;
 mod vrl;
 
-pub use lightcuts::{Builder, CutSizeProbe, LightKind, LightcutPass, LightcutSettings, LightcutsIntegrator};
+pub use lightcuts::{
+    Builder, ClusterKind, CutSizeProbe, CutStrategy, LightcutPass, LightcutSettings, LightcutsIntegrator,
+    Vpls, Vrls,
+};
 pub use vpl::VplIntegrator;
 pub use vrl::VrlIntegrator;
 

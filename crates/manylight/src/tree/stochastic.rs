@@ -1,0 +1,207 @@
+//! The stochastic, bound-free lightcut (ours; in the spirit of Lin & Yuksel 2020's real-time
+//! stochastic lightcuts and of the light-tree samplers of pbrt-v4 and Cycles; docs/lightcuts.md,
+//! "Stochastic cut").
+//!
+//! Per camera segment:
+//! 1. **Cut.** Start with the root and repeatedly replace the inner node of largest importance
+//!    ([`super::importance`]) by its two children until the cut has `k` nodes (or only leaves).
+//!    The cut is a deterministic function of the segment, so it does not bias anything.
+//! 2. **Sample.** In each cut node, descend to one light, going left with probability
+//!
+//!    ```text
+//!    p_left = (1 - a) I_l / (I_l + I_r) + a P_l / (P_l + P_r)
+//!    ```
+//!
+//!    (`I` importance, `P` summed power, `a` the power share). The light's probability is the
+//!    product of the choices on its way down; its sampled contribution divided by that
+//!    probability is an unbiased estimate of the cut node's sum, because every light with
+//!    non-zero power has a positive probability (the power share) and lights without power
+//!    contribute nothing. Summing over the disjoint cut nodes estimates the sum over all lights.
+//!
+//! The random numbers of a descent come from a hash of the segment key and the cut node, so the
+//! result does not depend on evaluation order or thread count.
+
+use super::{LightTree, Node};
+use haze_core::rng::mix64;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// Settings of the stochastic cut.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StochasticSettings {
+    /// Nodes in the cut (`--cut-size`): lights sampled per camera segment and tree.
+    pub cut_size: u32,
+    /// Share `a` of the child probability given by power alone (module docs), in `(0, 1]`.
+    pub power_share: f32,
+}
+
+impl Default for StochasticSettings {
+    /// `cut_size` 8, power share 0.1: see docs/lightcuts.md for the sweeps behind them.
+    fn default() -> Self {
+        StochasticSettings { cut_size: 8, power_share: 0.1 }
+    }
+}
+
+/// Scalar power of a node (sum of channels).
+#[inline]
+fn power(node: &Node) -> f32 {
+    node.power[0] + node.power[1] + node.power[2]
+}
+
+/// Probability of going to the left child (module docs). Falls back to the power share where
+/// the importances are all zero or not finite, and to 1/2 where the powers are too.
+#[inline]
+pub fn left_probability(left: &Node, right: &Node, i_left: f32, i_right: f32, share: f32) -> f32 {
+    let (pl, pr) = (power(left), power(right));
+    let by_power = if pl + pr > 0.0 && (pl + pr).is_finite() { pl / (pl + pr) } else { 0.5 };
+    let sum = i_left + i_right;
+    if sum > 0.0 && sum.is_finite() {
+        (1.0 - share) * (i_left / sum) + share * by_power
+    } else {
+        by_power
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    importance: f32,
+    node: u32,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Entry {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.importance.total_cmp(&o.importance).then(o.node.cmp(&self.node))
+    }
+}
+
+/// Reusable buffers of [`stochastic_cut`] (one per thread: nothing is allocated per segment
+/// once they have grown).
+#[derive(Default)]
+pub struct StochasticScratch {
+    heap: BinaryHeap<Entry>,
+    cut: Vec<u32>,
+}
+
+/// The cut of step 1 (module docs) into `scratch`, returned as node indices.
+pub fn select_cut<'s>(
+    tree: &LightTree,
+    importance: &impl Fn(&Node) -> f32,
+    cut_size: u32,
+    scratch: &'s mut StochasticScratch,
+) -> &'s [u32] {
+    let StochasticScratch { heap, cut } = scratch;
+    heap.clear();
+    cut.clear();
+    if tree.is_empty() {
+        return cut;
+    }
+    let nodes = &tree.nodes;
+    let root = &nodes[tree.root as usize];
+    if root.is_leaf() {
+        cut.push(tree.root);
+        return cut;
+    }
+    heap.push(Entry { importance: importance(root), node: tree.root });
+    // `cut` holds the leaves reached so far; the heap the inner nodes.
+    while heap.len() + cut.len() < cut_size.max(1) as usize {
+        let Some(top) = heap.pop() else { break };
+        let node = &nodes[top.node as usize];
+        for child in [node.left, node.right] {
+            let c = &nodes[child as usize];
+            if c.is_leaf() {
+                cut.push(child);
+            } else {
+                heap.push(Entry { importance: importance(c), node: child });
+            }
+        }
+    }
+    cut.extend(heap.drain().map(|e| e.node));
+    cut
+}
+
+/// Descends from node `start` to one light (step 2, module docs) with the uniform numbers of
+/// `rng`; returns the light and its probability given `start`.
+pub fn sample_light(
+    tree: &LightTree,
+    start: u32,
+    importance: &impl Fn(&Node) -> f32,
+    share: f32,
+    rng: &mut u64,
+) -> (u32, f32) {
+    let nodes = &tree.nodes;
+    let mut n = &nodes[start as usize];
+    let mut prob = 1.0f32;
+    while !n.is_leaf() {
+        let (l, r) = (&nodes[n.left as usize], &nodes[n.right as usize]);
+        let p = left_probability(l, r, importance(l), importance(r), share);
+        *rng = rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let u = (mix64(*rng) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
+        if u < p {
+            prob *= p;
+            n = l;
+        } else {
+            prob *= 1.0 - p;
+            n = r;
+        }
+    }
+    (n.rep, prob)
+}
+
+/// The probability of every light below `start` under [`sample_light`] (for tests and
+/// diagnostics; walks the whole subtree).
+pub fn light_probabilities(
+    tree: &LightTree,
+    start: u32,
+    importance: &impl Fn(&Node) -> f32,
+    share: f32,
+) -> Vec<(u32, f64)> {
+    let nodes = &tree.nodes;
+    let mut out = Vec::new();
+    let mut stack = vec![(start, 1.0f64)];
+    while let Some((i, prob)) = stack.pop() {
+        let n = &nodes[i as usize];
+        if n.is_leaf() {
+            out.push((n.rep, prob));
+            continue;
+        }
+        let (l, r) = (&nodes[n.left as usize], &nodes[n.right as usize]);
+        let p = left_probability(l, r, importance(l), importance(r), share) as f64;
+        stack.push((n.left, prob * p));
+        stack.push((n.right, prob * (1.0 - p)));
+    }
+    out
+}
+
+/// Estimates the sum of all lights' contributions to one camera segment: selects the cut, then
+/// samples one light per cut node and calls `evaluate(light, probability)`, which adds that
+/// light's sampled contribution divided by the probability to its own accumulator. `key` seeds
+/// the descents. Returns the cut's size.
+pub fn stochastic_cut(
+    tree: &LightTree,
+    importance: &impl Fn(&Node) -> f32,
+    settings: &StochasticSettings,
+    key: u64,
+    scratch: &mut StochasticScratch,
+    mut evaluate: impl FnMut(u32, f32),
+) -> u32 {
+    let cut = select_cut(tree, importance, settings.cut_size, scratch);
+    for &start in cut.iter() {
+        let mut rng = mix64(key ^ mix64(start as u64 ^ 0x5eed_c0de_d1ce_f00d));
+        let (light, prob) = sample_light(tree, start, importance, settings.power_share, &mut rng);
+        if prob > 0.0 {
+            evaluate(light, prob);
+        }
+    }
+    cut.len() as u32
+}
