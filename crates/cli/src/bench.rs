@@ -46,6 +46,12 @@ pub struct BenchArgs {
     /// lightcuts: PLOC search radius of the agglomerative builder (default: the builder's).
     #[arg(long)]
     pub ploc_radius: Option<usize>,
+    /// stochastic: the largest VRL count of the scaling table (10k, 100k, ... up to this).
+    #[arg(long, default_value_t = 10_000_000)]
+    pub max_vrls: u64,
+    /// stochastic: nodes per cut.
+    #[arg(long, default_value_t = haze_manylight::tree::stochastic::StochasticSettings::default().cut_size)]
+    pub cut_size: u32,
 }
 
 /// Mitsuba 3.9.1 `llvm_ad_rgb` volpath on the validation scenes on the same 2-core machine
@@ -70,7 +76,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             }
             Ok(())
         }
-        other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
+        "stochastic" => bench_stochastic(&args, &scenes),
+        other => anyhow::bail!("haze bench measures volpath, vrl, lightcuts or stochastic, not '{other}'"),
     }
 }
 
@@ -329,6 +336,74 @@ fn bench_volpath(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
 
 /// Seconds of one frame at 1 spp with `integ`: its per-pass light tracing and tree build included,
 /// its construction (the pilot light-tracing run) not.
+/// The stochastic cut's cost per camera segment against the number of VRLs: one pass of
+/// `--spp` samples per pixel sharing one light set, for 10k, 100k, ... `--max-vrls` VRLs and
+/// seeds 0, 1, 2; light tracing and tree build are timed apart from the gather (cuts, descents
+/// and light evaluations), whose time per camera segment should hardly grow with N.
+fn bench_stochastic(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vrls};
+    use haze_manylight::tree::stochastic::StochasticSettings;
+    if args.cut_size == 0 || args.spp == 0 {
+        anyhow::bail!("--cut-size and --spp must be at least 1");
+    }
+    for path in scenes {
+        let scene = load_scene(path, &args.define)?;
+        let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!(
+            "\n### {file}: stochastic cut of {} nodes, {}x{} at {} spp in one pass, seeds 0-2 (load average {})\n",
+            args.cut_size,
+            scene.camera.width,
+            scene.camera.height,
+            args.spp,
+            load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+        );
+        println!("| VRLs | trace s | build s | gather s (min-max over seeds) | gather ns per segment | vs first row |");
+        println!("|---|---|---|---|---|---|");
+        let mut first = None;
+        let mut n = 10_000u64;
+        while n <= args.max_vrls {
+            let mut rows = Vec::new();
+            for seed in 0..3u64 {
+                let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+                let lc = LightcutSettings {
+                    stochastic: StochasticSettings { cut_size: args.cut_size, ..Default::default() },
+                    ..Default::default()
+                };
+                let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, seed)?;
+                let settings =
+                    RenderSettings { spp: args.spp, spp_per_pass: args.spp, seed, ..Default::default() };
+                let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+                let (t, b) = (integ.trace_seconds(), integ.build_seconds());
+                let gather = (out.elapsed.as_secs_f64() - t - b).max(0.0);
+                rows.push((
+                    integ.lights_per_pass(),
+                    t,
+                    b,
+                    gather,
+                    gather * 1e9 / integ.segments().max(1) as f64,
+                ));
+            }
+            let mean = |f: fn(&(f64, f64, f64, f64, f64)) -> f64| rows.iter().map(f).sum::<f64>() / 3.0;
+            let (lo, hi) =
+                rows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r.3), hi.max(r.3)));
+            let per_seg = mean(|r| r.4);
+            let base = *first.get_or_insert(per_seg);
+            println!(
+                "| {:.0} | {:.2} | {:.2} | {:.2} ({lo:.2}-{hi:.2}) | {per_seg:.0} | {:.2} |",
+                mean(|r| r.0),
+                mean(|r| r.1),
+                mean(|r| r.2),
+                mean(|r| r.3),
+                per_seg / base
+            );
+            n *= 10;
+        }
+    }
+    Ok(())
+}
+
 fn frame_seconds(scene: &haze_scene::Scene, integ: &impl Integrator) -> f64 {
     let settings = RenderSettings { spp: 1, ..Default::default() };
     render(scene, integ, &settings, &AtomicBool::new(false), |_| {}).elapsed.as_secs_f64()

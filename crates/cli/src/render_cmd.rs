@@ -237,6 +237,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(s) = summary {
         eprintln!("{s}");
     }
+    if let (Some((trace, build)), Some(cut)) = (method.trace_and_build_seconds(), method.mean_cut_size()) {
+        let total = output.elapsed.as_secs_f64();
+        eprintln!(
+            "{name}: mean cut {cut:.1} nodes per camera segment and tree; time: light tracing {trace:.2} s, tree build {build:.2} s, gather {:.2} s (of {total:.2} s)",
+            (total - trace - build).max(0.0)
+        );
+    }
     report_and_write(&args, &scene, &name, &output)?;
     if let Some(path) = &args.cut_image {
         crate::cut_image::write(&method, &scene, args.seed, args.max_cut, path)?;

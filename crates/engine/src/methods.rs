@@ -157,6 +157,16 @@ impl Method {
         }
     }
 
+    /// Seconds spent tracing light paths and building light trees, summed over passes, for
+    /// lightcut methods (the rest of a render is gathering: the cuts and their lights).
+    pub fn trace_and_build_seconds(&self) -> Option<(f64, f64)> {
+        match self {
+            Method::VrlLightcuts(i) => Some((i.trace_seconds(), i.build_seconds())),
+            Method::VplLightcuts(i) => Some((i.trace_seconds(), i.build_seconds())),
+            _ => None,
+        }
+    }
+
     /// Mean number of nodes per cut (per camera segment), for lightcut methods.
     pub fn mean_cut_size(&self) -> Option<f64> {
         match self {

@@ -15,9 +15,9 @@ use haze_manylight::tree::build::{build_agglomerative, build_median_split, Build
 use haze_manylight::tree::importance::ImportanceContext;
 use haze_manylight::tree::lights::LightSummary;
 use haze_manylight::tree::stochastic::{
-    light_probabilities, sample_light, select_cut, stochastic_cut, StochasticScratch, StochasticSettings,
+    light_probabilities, sample_light, select_cut, stochastic_cut, SampleNode, SampleTree, StochasticScratch,
+    StochasticSettings,
 };
-use haze_manylight::tree::{LightTree, Node};
 use haze_manylight::vrl::{sample_vrl_contribution, Segment, Vrl, VrlMedium};
 use haze_testkit::chi2::chi2_test;
 use haze_testkit::ztest::sidak_threshold;
@@ -41,7 +41,7 @@ fn random_vrls(n: usize, seed: u64) -> Vec<Vrl> {
         .collect()
 }
 
-fn tree_of(vrls: &[Vrl], median: bool, seed: u64) -> LightTree {
+fn tree_of(vrls: &[Vrl], median: bool, seed: u64) -> SampleTree {
     let summaries: Vec<LightSummary> = vrls.iter().map(|v| LightSummary::vrl(v, &MEDIUM)).collect();
     let tree = if median {
         build_median_split(&summaries, seed)
@@ -49,7 +49,7 @@ fn tree_of(vrls: &[Vrl], median: bool, seed: u64) -> LightTree {
         build_agglomerative(&summaries, &BuildSettings { group_size: 64, seed, ..Default::default() })
     };
     tree.check(&summaries).expect("tree invariants");
-    tree
+    SampleTree::new(&tree)
 }
 
 /// A camera segment: half of them start inside the cloud and cross it.
@@ -64,13 +64,14 @@ fn random_segment(s: &mut Sampler, k: usize) -> Segment {
     Segment::new(o, (target - o).normalize_or(Vec3::X), len)
 }
 
-fn leaves_below(tree: &LightTree, node: u32, out: &mut Vec<u32>) {
+fn leaves_below(tree: &SampleTree, node: u32, out: &mut Vec<u32>) {
     let n = &tree.nodes[node as usize];
     if n.is_leaf() {
-        out.push(n.rep);
+        out.push(n.light());
     } else {
-        leaves_below(tree, n.left, out);
-        leaves_below(tree, n.right, out);
+        for c in n.children() {
+            leaves_below(tree, c, out);
+        }
     }
 }
 
@@ -85,7 +86,7 @@ fn cut_partitions_lights_and_probabilities_sum_to_one() {
         for k in 0..6 {
             let seg = random_segment(&mut s, k);
             let ctx = ImportanceContext::new(seg, &MEDIUM, MEDIUM.sigma_t);
-            let importance = |node: &Node| ctx.importance(node);
+            let importance = |node: &SampleNode| ctx.importance(node);
             for cut_size in [1u32, 4, 16, 5000] {
                 let mut scratch = StochasticScratch::default();
                 let cut = select_cut(&tree, &importance, cut_size, &mut scratch).to_vec();
@@ -122,8 +123,8 @@ fn descent_matches_its_probabilities() {
         let tree = tree_of(&vrls, trial % 2 == 1, trial);
         let seg = random_segment(&mut s, trial as usize);
         let ctx = ImportanceContext::new(seg, &MEDIUM, MEDIUM.sigma_t);
-        let importance = |node: &Node| ctx.importance(node);
-        let start = tree.root;
+        let importance = |node: &SampleNode| ctx.importance(node);
+        let start = 0;
         let probs = light_probabilities(&tree, start, &importance, 0.1);
         let n = 200_000;
         let mut observed = vec![0.0f64; vrls.len()];
@@ -148,7 +149,7 @@ fn descent_matches_its_probabilities() {
 /// (no occlusion; connection transmittance of the homogeneous medium). `misstate` multiplies
 /// the probability the estimate divides by for lights under the root's left child.
 fn estimates(
-    tree: &LightTree,
+    tree: &SampleTree,
     vrls: &[Vrl],
     seg: &Segment,
     settings: &StochasticSettings,
@@ -168,7 +169,7 @@ fn estimates(
     };
     let brute: f64 = (0..vrls.len() as u32).map(contribution).sum();
     let ctx = ImportanceContext::new(*seg, &MEDIUM, MEDIUM.sigma_t);
-    let importance = |node: &Node| ctx.importance(node);
+    let importance = |node: &SampleNode| ctx.importance(node);
     let mut scratch = StochasticScratch::default();
     let mut est = 0.0f64;
     stochastic_cut(tree, &importance, settings, key ^ 0xabc, &mut scratch, |light, prob| {
@@ -189,7 +190,7 @@ fn unbiasedness(settings: StochasticSettings, misstate: bool) -> (usize, f64) {
     let tree = tree_of(&vrls, false, 42);
     let left = {
         let mut below = Vec::new();
-        leaves_below(&tree, tree.nodes[tree.root as usize].left, &mut below);
+        leaves_below(&tree, tree.nodes[0].children()[0], &mut below);
         let mut m = vec![false; vrls.len()];
         for l in below {
             m[l as usize] = true;

@@ -30,7 +30,7 @@
 //! box grows around that point (`w = min(r / d_c, 1)` of the weight goes to `1 / 4 pi`). The
 //! light-side phase is left out: within a cluster the VRL directions spread.
 
-use super::Node;
+use super::stochastic::SampleNode;
 use crate::vrl::{Segment, VrlMedium};
 use haze_core::{Phase, Rgb};
 use std::f32::consts::PI;
@@ -74,10 +74,9 @@ impl ImportanceContext {
     /// power in a channel where the camera medium scatters (unless the transmittance
     /// underflows, which the sampler's power share covers).
     #[inline]
-    pub fn importance(&self, node: &Node) -> f32 {
+    pub fn importance(&self, node: &SampleNode) -> f32 {
         let seg = &self.seg;
-        let c = node.bounds.center();
-        let r = 0.5 * node.bounds.diagonal();
+        let (c, r) = (node.center, node.radius);
         let rel = c - seg.o;
         let along = rel.dot(seg.d);
         let perp2 = (rel.length_squared() - along * along).max(0.0);
@@ -107,21 +106,21 @@ impl ImportanceContext {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tree::{Aabb, NONE};
+    use crate::tree::build::build_median_split;
+    use crate::tree::lights::LightSummary;
+    use crate::tree::stochastic::SampleTree;
+    use crate::tree::Aabb;
     use glam::Vec3;
 
-    fn node(lo: Vec3, hi: Vec3, power: f32) -> Node {
-        Node {
+    fn node(lo: Vec3, hi: Vec3, power: f32) -> SampleNode {
+        let light = LightSummary {
             bounds: Aabb { lo, hi },
             intensity: power,
             flux_bound: Rgb::splat(power),
-            l_max: 0.0,
+            length: 0.0,
             power: Rgb::splat(power),
-            rep: 0,
-            left: NONE,
-            right: NONE,
-            count: 1,
-        }
+        };
+        SampleTree::new(&build_median_split(&[light], 0)).nodes[0]
     }
 
     fn context(g: f32) -> ImportanceContext {

@@ -21,8 +21,10 @@
 //! The random numbers of a descent come from a hash of the segment key and the cut node, so the
 //! result does not depend on evaluation order or thread count.
 
-use super::{LightTree, Node};
+use super::LightTree;
+use glam::Vec3;
 use haze_core::rng::mix64;
+use haze_core::Rgb;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -42,16 +44,95 @@ impl Default for StochasticSettings {
     }
 }
 
+/// A node of [`SampleTree`]: what the importance needs (box centre and half-diagonal, summed
+/// power) and where its children are, in 32 bytes.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct SampleNode {
+    pub center: Vec3,
+    /// Half the box's diagonal.
+    pub radius: f32,
+    /// Summed [`super::TreeLight::power`] of the lights below.
+    pub power: Rgb,
+    /// Inner node: index of the left child, the right child is next to it. Leaf: the light's
+    /// index with [`LEAF`] set.
+    link: u32,
+}
+
+/// Marks a leaf's `link`.
+const LEAF: u32 = 1 << 31;
+
+impl SampleNode {
+    pub fn is_leaf(&self) -> bool {
+        self.link & LEAF != 0
+    }
+    /// The light of a leaf.
+    pub fn light(&self) -> u32 {
+        self.link & !LEAF
+    }
+    /// The children of an inner node.
+    pub fn children(&self) -> [u32; 2] {
+        [self.link, self.link + 1]
+    }
+}
+
+/// A [`LightTree`] laid out for the descents: 32-byte nodes in depth-first order, the root at
+/// 0 and both children of a node side by side, so one descent step reads one or two cache
+/// lines instead of two 72-byte nodes anywhere in memory (the cost per level then hardly
+/// depends on the tree's size: docs/lightcuts.md, scaling table).
+#[derive(Clone, Debug, Default)]
+pub struct SampleTree {
+    pub nodes: Vec<SampleNode>,
+}
+
+impl SampleTree {
+    /// The layout of `tree` (at most `2^31` lights).
+    pub fn new(tree: &LightTree) -> Self {
+        if tree.is_empty() {
+            return SampleTree::default();
+        }
+        let of = |i: u32| {
+            let n = &tree.nodes[i as usize];
+            SampleNode {
+                center: n.bounds.center(),
+                radius: 0.5 * n.bounds.diagonal(),
+                power: n.power,
+                link: if n.is_leaf() { n.rep | LEAF } else { 0 },
+            }
+        };
+        let mut nodes = Vec::with_capacity(tree.nodes.len());
+        nodes.push(of(tree.root));
+        let mut stack = vec![(tree.root, 0u32)];
+        while let Some((src, dst)) = stack.pop() {
+            let n = &tree.nodes[src as usize];
+            if n.is_leaf() {
+                continue;
+            }
+            let k = nodes.len() as u32;
+            nodes[dst as usize].link = k;
+            nodes.push(of(n.left));
+            nodes.push(of(n.right));
+            stack.push((n.right, k + 1));
+            stack.push((n.left, k));
+        }
+        SampleTree { nodes }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+}
+
 /// Scalar power of a node (sum of channels).
 #[inline]
-fn power(node: &Node) -> f32 {
+fn power(node: &SampleNode) -> f32 {
     node.power[0] + node.power[1] + node.power[2]
 }
 
 /// Probability of going to the left child (module docs). Falls back to the power share where
 /// the importances are all zero or not finite, and to 1/2 where the powers are too.
 #[inline]
-pub fn left_probability(left: &Node, right: &Node, i_left: f32, i_right: f32, share: f32) -> f32 {
+pub fn left_probability(left: &SampleNode, right: &SampleNode, i_left: f32, i_right: f32, share: f32) -> f32 {
     let (pl, pr) = (power(left), power(right));
     let by_power = if pl + pr > 0.0 && (pl + pr).is_finite() { pl / (pl + pr) } else { 0.5 };
     let sum = i_left + i_right;
@@ -93,10 +174,17 @@ pub struct StochasticScratch {
     cut: Vec<u32>,
 }
 
+impl StochasticScratch {
+    /// The cut of the last [`select_cut`] or [`stochastic_cut`].
+    pub fn cut(&self) -> &[u32] {
+        &self.cut
+    }
+}
+
 /// The cut of step 1 (module docs) into `scratch`, returned as node indices.
 pub fn select_cut<'s>(
-    tree: &LightTree,
-    importance: &impl Fn(&Node) -> f32,
+    tree: &SampleTree,
+    importance: &impl Fn(&SampleNode) -> f32,
     cut_size: u32,
     scratch: &'s mut StochasticScratch,
 ) -> &'s [u32] {
@@ -107,17 +195,15 @@ pub fn select_cut<'s>(
         return cut;
     }
     let nodes = &tree.nodes;
-    let root = &nodes[tree.root as usize];
-    if root.is_leaf() {
-        cut.push(tree.root);
+    if nodes[0].is_leaf() {
+        cut.push(0);
         return cut;
     }
-    heap.push(Entry { importance: importance(root), node: tree.root });
+    heap.push(Entry { importance: importance(&nodes[0]), node: 0 });
     // `cut` holds the leaves reached so far; the heap the inner nodes.
     while heap.len() + cut.len() < cut_size.max(1) as usize {
         let Some(top) = heap.pop() else { break };
-        let node = &nodes[top.node as usize];
-        for child in [node.left, node.right] {
+        for child in nodes[top.node as usize].children() {
             let c = &nodes[child as usize];
             if c.is_leaf() {
                 cut.push(child);
@@ -133,9 +219,9 @@ pub fn select_cut<'s>(
 /// Descends from node `start` to one light (step 2, module docs) with the uniform numbers of
 /// `rng`; returns the light and its probability given `start`.
 pub fn sample_light(
-    tree: &LightTree,
+    tree: &SampleTree,
     start: u32,
-    importance: &impl Fn(&Node) -> f32,
+    importance: &impl Fn(&SampleNode) -> f32,
     share: f32,
     rng: &mut u64,
 ) -> (u32, f32) {
@@ -143,7 +229,8 @@ pub fn sample_light(
     let mut n = &nodes[start as usize];
     let mut prob = 1.0f32;
     while !n.is_leaf() {
-        let (l, r) = (&nodes[n.left as usize], &nodes[n.right as usize]);
+        let [li, ri] = n.children();
+        let (l, r) = (&nodes[li as usize], &nodes[ri as usize]);
         let p = left_probability(l, r, importance(l), importance(r), share);
         *rng = rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let u = (mix64(*rng) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
@@ -155,15 +242,15 @@ pub fn sample_light(
             n = r;
         }
     }
-    (n.rep, prob)
+    (n.light(), prob)
 }
 
 /// The probability of every light below `start` under [`sample_light`] (for tests and
 /// diagnostics; walks the whole subtree).
 pub fn light_probabilities(
-    tree: &LightTree,
+    tree: &SampleTree,
     start: u32,
-    importance: &impl Fn(&Node) -> f32,
+    importance: &impl Fn(&SampleNode) -> f32,
     share: f32,
 ) -> Vec<(u32, f64)> {
     let nodes = &tree.nodes;
@@ -172,13 +259,14 @@ pub fn light_probabilities(
     while let Some((i, prob)) = stack.pop() {
         let n = &nodes[i as usize];
         if n.is_leaf() {
-            out.push((n.rep, prob));
+            out.push((n.light(), prob));
             continue;
         }
-        let (l, r) = (&nodes[n.left as usize], &nodes[n.right as usize]);
+        let [li, ri] = n.children();
+        let (l, r) = (&nodes[li as usize], &nodes[ri as usize]);
         let p = left_probability(l, r, importance(l), importance(r), share) as f64;
-        stack.push((n.left, prob * p));
-        stack.push((n.right, prob * (1.0 - p)));
+        stack.push((li, prob * p));
+        stack.push((ri, prob * (1.0 - p)));
     }
     out
 }
@@ -188,8 +276,8 @@ pub fn light_probabilities(
 /// light's sampled contribution divided by the probability to its own accumulator. `key` seeds
 /// the descents. Returns the cut's size.
 pub fn stochastic_cut(
-    tree: &LightTree,
-    importance: &impl Fn(&Node) -> f32,
+    tree: &SampleTree,
+    importance: &impl Fn(&SampleNode) -> f32,
     settings: &StochasticSettings,
     key: u64,
     scratch: &mut StochasticScratch,

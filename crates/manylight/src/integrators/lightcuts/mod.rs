@@ -21,7 +21,9 @@ use crate::tree::cone::{DirCone, LineCone};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
 use crate::tree::importance::ImportanceContext;
 use crate::tree::lights::LightSummary;
-use crate::tree::stochastic::{stochastic_cut, StochasticScratch, StochasticSettings};
+use crate::tree::stochastic::{
+    stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
+};
 use crate::tree::{LightTree, Node};
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
@@ -136,12 +138,8 @@ pub struct Forest<K: ClusterKind> {
     /// Cones of the VRLs' directions per node (`--bound tight` only; empty otherwise).
     pub cones: Vec<LineCone>,
     pub dir_cones: Vec<DirCone>,
-}
-
-impl<K: ClusterKind> Default for Forest<K> {
-    fn default() -> Self {
-        Forest { lights: Vec::new(), tree: LightTree::default(), cones: Vec::new(), dir_cones: Vec::new() }
-    }
+    /// The tree laid out for the stochastic cut's descents (`--cut stochastic` only).
+    pub sample: SampleTree,
 }
 
 /// What one pass shares between its camera samples: the two trees and the media.
@@ -175,9 +173,11 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
             Builder::Agglomerative => build_agglomerative(&summaries, &build),
             Builder::MedianSplit => build_median_split(&summaries, seed),
         };
-        let mut forest = Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new() };
-        if self.settings.strategy == CutStrategy::Bound {
-            K::prepare(&mut forest, self.settings.bound);
+        let mut forest =
+            Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new(), sample: SampleTree::default() };
+        match self.settings.strategy {
+            CutStrategy::Bound => K::prepare(&mut forest, self.settings.bound),
+            CutStrategy::Stochastic => forest.sample = SampleTree::new(&forest.tree),
         }
         forest
     }
@@ -191,6 +191,11 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
             self.stats.cut_max.load(Ordering::Relaxed),
             self.stats.hit_max.load(Ordering::Relaxed) as f64 / segs,
         )
+    }
+
+    /// Camera segments that had a cut (per tree with lights), so far.
+    pub fn segments(&self) -> u64 {
+        self.stats.segments.load(Ordering::Relaxed)
     }
 
     /// Lights per pass, averaged over the passes so far.
@@ -213,9 +218,12 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
 thread_local! {
     static CUT_SCRATCH: RefCell<CutScratch> = RefCell::new(CutScratch::default());
     static STOCHASTIC_SCRATCH: RefCell<StochasticScratch> = RefCell::new(StochasticScratch::default());
-    /// Cut sizes summed and camera segments counted on this thread since [`CutSizeProbe`]
-    /// last reset them.
-    static CUT_TALLY: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
+    /// What [`CutSizeProbe`] maps, summed, and camera segments counted on this thread since
+    /// it last reset them: the cut size (bound cut) or the largest cut node's share of the
+    /// cut's importance (stochastic cut).
+    static CUT_TALLY: std::cell::Cell<(f64, u64)> = const { std::cell::Cell::new((0.0, 0)) };
+    /// Set while [`CutSizeProbe`] renders: the stochastic cut then also computes its share.
+    static PROBING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// The deterministic cut's view of one forest and camera segment.
@@ -293,11 +301,11 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
             let (value, stats) = match self.settings.strategy {
                 CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
                     let ctx = ImportanceContext::new(cs.seg, cam_medium, pass.sigma_t_min);
-                    let importance = |n: &Node| ctx.importance(n);
+                    let importance = |n: &SampleNode| ctx.importance(n);
                     let mut sum = Rgb::ZERO;
                     let descent_key = key ^ (0xa5a5_5a5a_0f0f_f0f0 * (group as u64 + 1));
                     let size = stochastic_cut(
-                        &forest.tree,
+                        &forest.sample,
                         &importance,
                         &self.settings.stochastic,
                         descent_key,
@@ -307,6 +315,20 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
                             sum += K::contribution(scene, cs, &pass.media, l, key, light) * (1.0 / prob);
                         },
                     );
+                    if PROBING.get() {
+                        let nodes = &forest.sample.nodes;
+                        let (mut total, mut largest) = (0.0f64, 0.0f64);
+                        for &n in scratch.cut() {
+                            let i = importance(&nodes[n as usize]) as f64;
+                            total += i;
+                            largest = largest.max(i);
+                        }
+                        let share = if total > 0.0 { largest / total } else { 1.0 };
+                        CUT_TALLY.with(|t| {
+                            let (v, n) = t.get();
+                            t.set((v + share, n + 1));
+                        });
+                    }
                     (sum, CutStats { size, hit_max: false })
                 }),
                 CutStrategy::Bound => CUT_SCRATCH.with_borrow_mut(|scratch| {
@@ -360,10 +382,12 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         if s.size == 0 {
             return;
         }
-        CUT_TALLY.with(|t| {
-            let (size, n) = t.get();
-            t.set((size + s.size as u64, n + 1));
-        });
+        if self.settings.strategy == CutStrategy::Bound {
+            CUT_TALLY.with(|t| {
+                let (size, n) = t.get();
+                t.set((size + s.size as f64, n + 1));
+            });
+        }
         self.stats.segments.fetch_add(1, Ordering::Relaxed);
         self.stats.cut_total.fetch_add(s.size as u64, Ordering::Relaxed);
         self.stats.cut_max.fetch_max(s.size as u64, Ordering::Relaxed);
@@ -373,8 +397,10 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
     }
 }
 
-/// Renders the mean cut size over a camera path's segments instead of its radiance, in every
-/// channel of the `emitted` component (0 where the path meets no medium). Runs the wrapped
+/// Renders, instead of a camera path's radiance, the mean over its segments of the cut size
+/// (bound cut) or of the largest cut node's share of the cut's importance (stochastic cut: 1
+/// where one cluster dominates, `1/k` where the importance spreads evenly), in every channel of
+/// the `emitted` component (0 where the path meets no medium). Runs the wrapped
 /// integrator unchanged, so the cuts are those of the image with the same seed and pass.
 pub struct CutSizeProbe<'a, K: ClusterKind>(pub &'a LightcutsIntegrator<K>);
 
@@ -397,8 +423,10 @@ impl<K: ClusterKind> Integrator for CutSizeProbe<'_, K> {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        CUT_TALLY.with(|t| t.set((0, 0)));
+        CUT_TALLY.with(|t| t.set((0.0, 0)));
+        PROBING.set(true);
         let _ = self.0.radiance(scene, pass, ray, medium, sampler);
+        PROBING.set(false);
         let (size, n) = CUT_TALLY.with(|t| t.get());
         let mut r = PathRadiance::default();
         if n > 0 {
