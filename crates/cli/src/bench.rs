@@ -3,6 +3,7 @@
 use crate::render_cmd::{load_scene, set_threads};
 use anyhow::Result;
 use clap::Args;
+use haze_engine::options::{self, MethodKind, Options, Spelling};
 use haze_manylight::integrators::{LightBudget, ManyLightSettings, VrlIntegrator};
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
@@ -16,27 +17,28 @@ use std::time::Instant;
 pub struct BenchArgs {
     /// Scenes to measure (default: the shared validation scenes).
     pub scenes: Vec<PathBuf>,
-    /// Samples per pixel per scene.
-    #[arg(long, default_value_t = 64)]
-    pub spp: u32,
+    /// volpath, vrl: samples per pixel per scene (default 64).
+    #[arg(long)]
+    pub spp: Option<String>,
     #[arg(long)]
     pub threads: Option<usize>,
     /// What to measure: `volpath` (samples/s against Mitsuba 3) or `vrl` (VRL evaluations/s).
     #[arg(long, default_value = "volpath")]
     pub integrator: String,
-    /// vrl: VRLs per pass.
-    #[arg(long, default_value_t = 10_000)]
-    pub vrls: u64,
+    /// vrl: VRLs per pass (default: haze render's).
+    #[arg(long)]
+    pub vrls: Option<String>,
     /// lightcuts: measure cut sizes up to this many VRLs (larger counts: build time only).
     #[arg(long, default_value_t = 1_000_000)]
     pub max_cut_vrls: u64,
     /// lightcuts: most nodes per cut for the cut-size column (a large value shows the sizes the
-    /// error criterion alone asks for).
-    #[arg(long, default_value_t = 1000)]
-    pub max_cut: u32,
-    /// lightcuts: cluster bound for the cut-size column: paper, conservative or tight.
-    #[arg(long, default_value = "paper")]
-    pub bound: String,
+    /// error criterion alone asks for; default: haze render's).
+    #[arg(long)]
+    pub max_cut: Option<String>,
+    /// lightcuts: cluster bound for the cut-size column: paper, conservative or tight (default:
+    /// haze render's).
+    #[arg(long)]
+    pub bound: Option<String>,
     /// Override a scene `<default>` parameter: -D name=value (e.g. -D res=48 for cheaper cuts).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
@@ -60,37 +62,60 @@ pub fn run(args: BenchArgs) -> Result<()> {
     } else {
         args.scenes.clone()
     };
-    match args.integrator.as_str() {
-        "volpath" => bench_volpath(&args, &scenes),
-        "vrl" => bench_vrl(&args, &scenes),
-        "lightcuts" => {
-            bench_lightcuts(&args, &scenes)?;
+    // The options go through the engine's table, as haze render's do.
+    let kind = match args.integrator.as_str() {
+        "volpath" => MethodKind::VolPath,
+        "vrl" => MethodKind::Vrl,
+        "lightcuts" => MethodKind::VrlLightcuts,
+        other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
+    };
+    if kind.is_lightcuts() {
+        // Its frames are 1 spp and its light counts 10k, 100k and 1M.
+        for (flag, given) in [("--spp", &args.spp), ("--vrls", &args.vrls)] {
+            if given.is_some() {
+                anyhow::bail!("{flag} does not apply to haze bench --integrator lightcuts (it measures 1-spp frames with 10k, 100k and 1M VRLs)");
+            }
+        }
+    }
+    let mut given = Vec::new();
+    let spp = args.spp.as_deref().unwrap_or(if kind.is_lightcuts() { "1" } else { "64" });
+    for (name, value) in [
+        ("spp", Some(spp)),
+        ("vrls", args.vrls.as_deref()),
+        ("max_cut", args.max_cut.as_deref()),
+        ("bound", args.bound.as_deref()),
+    ] {
+        if let Some(v) = value {
+            given.push((name, v));
+        }
+    }
+    let options = options::resolve(kind, &given, Spelling::Flag)?;
+    match kind {
+        MethodKind::VolPath => bench_volpath(&options, &scenes),
+        MethodKind::Vrl => bench_vrl(&options, &scenes),
+        _ => {
+            bench_lightcuts(&args, &options, &scenes)?;
             if args.scenes.is_empty() && !args.build_only {
                 cut_growth()?;
             }
             Ok(())
         }
-        other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
     }
 }
 
 /// Light-tree build times (3-step agglomerative vs median split, 1 and all threads, for 10k,
 /// 100k and 1M VRLs traced in the scene), mean cut size against the number of VRLs, and the
 /// frame time of `vrl_lightcuts` with 100k VRLs against `vrl` with 10k VRLs at 1 spp.
-fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> Result<()> {
     use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
     use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
-    use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
     use haze_manylight::tree::cut::CutSettings;
     use haze_manylight::tree::lights::LightSummary;
     use haze_manylight::vrl::{Segment, Vrl};
-    let bound = match args.bound.as_str() {
-        "paper" => BoundKind::Paper,
-        "conservative" => BoundKind::Conservative,
-        "tight" => BoundKind::Tight,
-        other => anyhow::bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
-    };
+    let bound = options.method.lightcuts.bound;
+    let max_cut = options.method.lightcuts.cut.max_cut;
+    let bound_name = options::find("bound").and_then(|b| b.value_in(options)).unwrap_or_default();
     for path in scenes {
         let scene = load_scene(path, &args.define)?;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -105,8 +130,8 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             scene.camera.height,
             build_settings.radius,
             build_settings.group_size,
-            args.bound,
-            args.max_cut,
+            bound_name,
+            max_cut,
             load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
         );
         println!("| VRLs | builder | threads | build s | CPU s | ns per N log2 N | tree cost | mean cut (1 spp) | segments at max-cut | cut s |");
@@ -151,7 +176,7 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
                             },
                             build: build_settings,
                             bound,
-                            cut: CutSettings { max_cut: args.max_cut, ..Default::default() },
+                            cut: CutSettings { max_cut, ..Default::default() },
                             ..Default::default()
                         };
                         let ml =
@@ -259,7 +284,7 @@ fn process_cpu_seconds() -> Option<f64> {
 
 /// VRL evaluations per second: one evaluation is one camera segment x one VRL, with its
 /// visibility test. Light tracing time is reported separately.
-fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+fn bench_vrl(options: &Options, scenes: &[PathBuf]) -> Result<()> {
     println!(
         "| scene | pixels | spp | VRLs/pass | light tracing s | total s | evaluations | M evaluations/s |"
     );
@@ -267,14 +292,14 @@ fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     for path in scenes {
         let scene = load_scene(path, &[])?;
         let ml = ManyLightSettings {
-            budget: LightBudget::Vrls(args.vrls),
+            budget: options.method.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
         let integrator = VrlIntegrator::new(&scene, ml, 0)?;
         let t0 = Instant::now();
         let _ = integrator.begin_pass(&scene, 0, 0);
         let trace_s = t0.elapsed().as_secs_f64();
-        let settings = RenderSettings { spp: args.spp, spp_per_pass: 1, ..Default::default() };
+        let settings = RenderSettings { spp: spp(options), spp_per_pass: 1, ..Default::default() };
         let out = render(&scene, &integrator, &settings, &AtomicBool::new(false), |_| {});
         let secs = out.elapsed.as_secs_f64();
         let evals = integrator.evaluations();
@@ -284,7 +309,7 @@ fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             scene.camera.width,
             scene.camera.height,
             out.film.samples,
-            args.vrls,
+            options::find("vrls").and_then(|o| o.value_in(options)).unwrap_or_default(),
             trace_s,
             secs,
             evals,
@@ -294,12 +319,17 @@ fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
-fn bench_volpath(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+/// The `--spp` of `haze bench` (always given: it has a default of its own).
+fn spp(options: &Options) -> u32 {
+    options.spp.expect("bench passes --spp")
+}
+
+fn bench_volpath(options: &Options, scenes: &[PathBuf]) -> Result<()> {
     println!("| scene | pixels | spp | seconds | Msamples/s | Mitsuba 3 Msamples/s | ratio haze/Mitsuba |");
     println!("|---|---|---|---|---|---|---|");
     for path in scenes {
         let scene = load_scene(path, &[])?;
-        let settings = RenderSettings { spp: args.spp, spp_per_pass: 4, ..Default::default() };
+        let settings = RenderSettings { spp: spp(options), spp_per_pass: 4, ..Default::default() };
         let out = render(
             &scene,
             &VolPath::from_spec(&scene.integrator),

@@ -70,7 +70,7 @@ fn bad_command_line_values_are_clear_errors() {
     let out = tmp("x.exr");
     let o = out.to_str().unwrap();
     for (args, want) in [
-        (vec!["render", s, "-o", o, "--spp", "0"], "--spp must be at least 1"),
+        (vec!["render", s, "-o", o, "--spp", "0"], "--spp must be a positive integer"),
         (vec!["render", s, "-o", o, "--time", "-2"], "--time must be a positive number"),
         (vec!["render", s, "-o", o, "--time", "NaN"], "--time must be a positive number"),
         (vec!["render", s, "-o", o, "--threads", "0", "--spp", "1"], "--threads must be at least 1"),
@@ -223,5 +223,5 @@ fn cut_image_is_a_heat_map_of_the_image_size() {
         ]),
         "cut image with vrl",
     );
-    assert!(e.contains("--cut-image needs a lightcut integrator"), "{e}");
+    assert!(e.contains("--cut-image does not apply to vrl"), "{e}");
 }
