@@ -157,6 +157,24 @@ class Scene:
         """
         return self._inner.render_passes(integrator, first, count, **_given(locals()))
 
+    def cut_sizes(
+        self,
+        integrator: str | None = "vrl_lightcuts",
+        *,
+        seed: int = 0,
+        vrls: int | None = None,
+        light_paths: int | None = None,
+        epsilon: float | None = None,
+        max_cut: int | None = None,
+        bound: str | None = None,
+        builder: str | None = None,
+    ) -> np.ndarray:
+        """The mean lightcut size per pixel, a float32 array of shape (H, W), as ``haze render
+        --cut-image`` draws it: one extra 1-spp pass (pass 0 with ``seed``, so the lights and
+        cuts of the image's first pass); 0 where the camera path meets no medium. Lightcut
+        methods only; the options are those of :meth:`render` without the sample budget."""
+        return self._inner.cut_sizes(integrator, **_given(locals()))
+
     def __repr__(self) -> str:
         return repr(self._inner)
 

@@ -55,6 +55,7 @@ class Scene:
     def render(self, integrator: Optional[str] = None, **options: Any) -> Film:
         """Renders with the engine's options (method_options()) given by name."""
     def render_passes(self, integrator: Optional[str] = None, first: int = 0, count: int = 1, **options: Any) -> Film: ...
+    def cut_sizes(self, integrator: Optional[str] = None, **options: Any) -> npt.NDArray[np.float32]: ...
     def check_options(self, integrator: Optional[str] = None, **options: Any) -> str:
         """Checks the options for the method as render would; returns the method's name."""
 

@@ -65,6 +65,12 @@ def test_signatures_have_every_option_with_the_engine_defaults():
     check_signature(haze.Scene.render)
     check_signature(haze.Scene.render_film)
     check_signature(haze.Scene.render_passes, skip=("spp", "time"))
+    # cut_sizes: one 1-spp pass of a lightcut method: the seed and the options of those methods.
+    lightcuts = {"vrl_lightcuts", "vpl_lightcuts"}
+    check_signature(
+        haze.Scene.cut_sizes,
+        skip=[n for n, o in TABLE.items() if n != "seed" and (o["scope"] == "render" or not lightcuts & set(o["methods"]))],
+    )
     distributed = pytest.importorskip("haze.distributed", reason="haze.distributed needs Ray")
     check_signature(distributed.render)
 
@@ -99,6 +105,18 @@ def test_every_option_is_used_or_rejected_naming_it_and_the_method(small_box):
         scene.render("vrl_lightcuts", spp=1, epsilon=float("nan"))
     with pytest.raises(ValueError, match="spp does not apply"):
         scene._inner.render_passes("volpath", 0, 1, spp=2)
+
+
+def test_cut_sizes_are_the_command_lines_cut_image(small_box):
+    scene = haze.load_scene(small_box)
+    sizes = scene.cut_sizes("vrl_lightcuts", light_paths=40, max_cut=20)
+    assert sizes.shape == (24, 32) and sizes.dtype == np.float32
+    assert sizes.max() <= 20 and sizes.max() > 1
+    assert (scene.cut_sizes("vrl_lightcuts", light_paths=40, max_cut=5) <= 5).all()
+    with pytest.raises(ValueError, match="cut sizes need a lightcut method"):
+        scene.cut_sizes("vrl")
+    with pytest.raises(ValueError, match="spp does not apply"):
+        scene._inner.cut_sizes("vrl_lightcuts", spp=2)
 
 
 def test_new_options_reach_the_render(small_box):

@@ -110,11 +110,11 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
     use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
     use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
     use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
-    use haze_manylight::tree::cut::CutSettings;
     use haze_manylight::tree::lights::LightSummary;
     use haze_manylight::vrl::{Segment, Vrl};
     let bound = options.method.lightcuts.bound;
-    let max_cut = options.method.lightcuts.cut.max_cut;
+    let cut_settings = options.method.lightcuts.cut;
+    let max_cut = cut_settings.max_cut;
     let bound_name = options::find("bound").and_then(|b| b.value_in(options)).unwrap_or_default();
     for path in scenes {
         let scene = load_scene(path, &args.define)?;
@@ -125,12 +125,13 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
             BuildSettings { radius: args.ploc_radius.unwrap_or(defaults.radius), ..defaults };
         let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
         println!(
-            "\n### {file} ({}x{}; PLOC radius {}, groups of {}; cuts: bound {}, epsilon 0.02, max cut {}; load average {})\n",
+            "\n### {file} ({}x{}; PLOC radius {}, groups of {}; cuts: bound {}, epsilon {}, max cut {}; load average {})\n",
             scene.camera.width,
             scene.camera.height,
             build_settings.radius,
             build_settings.group_size,
             bound_name,
+            cut_settings.epsilon,
             max_cut,
             load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
         );
@@ -176,7 +177,7 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
                             },
                             build: build_settings,
                             bound,
-                            cut: CutSettings { max_cut, ..Default::default() },
+                            cut: cut_settings,
                             ..Default::default()
                         };
                         let ml =

@@ -3,7 +3,7 @@
 use crate::render_cmd::{load_scene, render_and_write, set_threads, Outputs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use haze_engine::options::{self, parse_count, Scope, OPTIONS};
+use haze_engine::options::{self, Scope, OPTIONS};
 use haze_engine::{method_names, prepare, Method, MethodKind, MethodOptions, Spelling};
 use haze_manylight::integrators::LightBudget;
 use haze_render::image_io::RgbImage;
@@ -60,10 +60,12 @@ impl FromStr for MethodSpec {
             .ok_or_else(|| format!("unknown method '{name}' in '{s}' (available: {})", method_names()))?;
         let mut given: Vec<(&'static str, String)> = Vec::new();
         if let Some(l) = lights {
-            // `LIGHTS` is `vrls=LIGHTS`, checked as such; a bad count shows as written.
-            let count = parse_count(l).filter(|n| *n > 0).ok_or_else(|| {
-                format!("'{s}': the light count must be a positive integer (e.g. 10000, 100k, 1M), got '{l}'")
-            })?;
+            // `LIGHTS` is `vrls=LIGHTS`, checked by the engine, kept as a plain number.
+            let vrls = options::find("vrls").expect("the engine's vrls option");
+            let count = match vrls.parse(l, Spelling::Keyword).map_err(|e| format!("'{s}': {e}"))? {
+                options::Value::Int(n) => n,
+                other => unreachable!("vrls is a count, got {other:?}"),
+            };
             given.push(("vrls", count.to_string()));
         }
         for opt in parts {

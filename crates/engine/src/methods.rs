@@ -4,8 +4,8 @@
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{
-    surface_warning, LightBudget, LightKind, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
-    VplIntegrator, VrlIntegrator,
+    surface_warning, CutSizeProbe, LightBudget, LightKind, LightcutSettings, LightcutsIntegrator,
+    ManyLightSettings, VplIntegrator, VrlIntegrator,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -107,6 +107,18 @@ impl Method {
             Method::Vpl(i) => i.summary(),
             Method::Lightcuts(i) => i.summary(),
         }
+    }
+
+    /// The mean cut size over each pixel's camera segments (row-major, 0 where the camera path
+    /// meets no medium), from one extra 1-spp pass: pass 0 with `seed`, i.e. the lights and
+    /// cuts of the image's first pass. Lightcut methods only.
+    pub fn cut_sizes(&self, scene: &Scene, seed: u64) -> Result<Vec<f32>> {
+        let Method::Lightcuts(integrator) = self else {
+            bail!("cut sizes need a lightcut method ({})", crate::options::names(MethodKind::LIGHTCUTS));
+        };
+        let settings = RenderSettings { spp: 1, seed, ..Default::default() };
+        let out = render(scene, &CutSizeProbe(integrator), &settings, &AtomicBool::new(false), |_| {});
+        Ok(out.film.mean(None).chunks(3).map(|p| p[0]).collect())
     }
 
     /// Mean number of nodes per cut (per camera segment), for lightcut methods.

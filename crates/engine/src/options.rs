@@ -76,7 +76,8 @@ pub fn method_names() -> String {
     names(&MethodKind::ALL)
 }
 
-fn names(methods: &[MethodKind]) -> String {
+/// `methods`' names, comma-separated.
+pub fn names(methods: &[MethodKind]) -> String {
     methods.iter().map(|m| m.name()).collect::<Vec<_>>().join(", ")
 }
 

@@ -5,6 +5,7 @@ use crate::{interrupt, value_error, SceneError};
 use haze_engine::passes::render_passes;
 use haze_engine::scene::{load_file_with_sources, LoadError, LoadOptions};
 use haze_engine::{prepare, Method, Options, Spelling};
+use numpy::PyArrayMethods;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
@@ -157,6 +158,34 @@ impl Scene {
         })?
         .map_err(value_error)?;
         Ok(Film { inner: out.film })
+    }
+
+    /// The mean cut size per pixel, float32 (H, W), of a lightcut method: one extra 1-spp pass
+    /// (pass 0 with `seed`: the cuts of the image's first pass), as `haze render --cut-image`
+    /// draws it. `options` as for `render`, without the sample budget (`spp`, `time`,
+    /// `spp_per_pass`, `components`). Releases the GIL.
+    #[pyo3(signature = (integrator=None, **options))]
+    fn cut_sizes<'py>(
+        &self,
+        py: Python<'py>,
+        integrator: Option<String>,
+        options: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let given = given(options)?;
+        let budget = ["spp", "time", "spp_per_pass", "components"];
+        if let Some((name, _)) = given.iter().find(|(n, _)| budget.contains(&n.as_str())) {
+            return Err(PyValueError::new_err(format!(
+                "cut_sizes renders one 1-spp pass: {name} does not apply"
+            )));
+        }
+        let scene = self.inner.clone();
+        let sizes = interrupt::run(py, move |_| -> anyhow::Result<_> {
+            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
+            m.cut_sizes(&scene, options.seed)
+        })?
+        .map_err(value_error)?;
+        let (w, h) = (self.inner.camera.width as usize, self.inner.camera.height as usize);
+        Ok(numpy::PyArray1::from_vec(py, sizes).reshape([h, w])?.into_any())
     }
 
     /// Checks `options` for the method `integrator` as `render` would, without rendering, and
