@@ -326,7 +326,8 @@ def main(argv: list[str] | None = None) -> int:
         if o["kind"] == "flag":
             p.add_argument(o["flag"], dest=o["name"], action="store_const", const=True, default=None, help=o["help"])
         else:
-            p.add_argument(o["flag"], dest=o["name"], default=None, metavar="VALUE", help=o["help"])
+            kind = {"count": int, "integer": int, "number": float}.get(o["kind"], str)
+            p.add_argument(o["flag"], dest=o["name"], type=kind, default=None, metavar="VALUE", help=o["help"])
     p.add_argument("--passes-per-task", type=int, default=None)
     p.add_argument("--exposure", type=float, default=0.0, help="exposure of the PNG preview in stops")
     p.add_argument("-D", dest="define", action="append", default=[], metavar="NAME=VALUE")

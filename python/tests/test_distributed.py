@@ -132,3 +132,12 @@ def test_options_are_checked_on_the_driver(cluster, small_box):
         distributed.render(small_box, spp=1, time=1.0, progress=False, **OPTIONS)
     with pytest.raises(ValueError, match="multiple of spp_per_pass"):
         distributed.render(small_box, "volpath", spp=3, spp_per_pass=2, progress=False)
+
+
+def test_the_command_line_takes_the_engines_options(cluster, small_box, tmp_path):
+    out = tmp_path / "d.exr"
+    args = [str(small_box), "-o", str(out), "--spp", "2", "--vrls", "300", "--max-cut", "50", "--seed", "3", "-q"]
+    assert distributed.main(args) == 0
+    single = haze.load_scene(small_box).render_passes(first=0, count=2, seed=3, vrls=300, max_cut=50)
+    assert np.array_equal(haze.read_exr(out), single.mean())
+    assert distributed.main([str(small_box), "-o", str(out), "--integrator", "vrl", "--max-cut", "5", "-q"]) == 2

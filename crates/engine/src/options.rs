@@ -1,8 +1,13 @@
 //! Every option of a render, once: its name, default, validation, help text and the methods it
 //! applies to ([`OPTIONS`]). `haze render` makes its flags from this table, `haze compare` its
 //! `KEY=VALUE` method options, the Python binding its keyword arguments; [`resolve`] checks and
-//! applies what a front end was given. Adding an option is one entry of [`OPTIONS`] (and its
-//! field in [`Options`] or [`MethodOptions`]); the tests of every front end are driven by it.
+//! applies what a front end was given.
+//!
+//! Adding an option is one entry of [`OPTIONS`] (with its field in [`Options`] or
+//! [`MethodOptions`]): `haze render`, `haze compare`, `python -m haze.distributed` and the
+//! binding take it from there. The Python signatures (python/haze) spell the options out for
+//! editors and `help()`; `python/tests/test_options.py` fails until each has the new one, and
+//! `crates/cli/tests/options.rs` until the README's usage block does.
 //!
 //! An option given for a method it does not apply to is an error naming the option and the
 //! method, never silently ignored.
