@@ -463,6 +463,27 @@ mod tests {
     }
 
     #[test]
+    fn every_method_option_with_every_method_is_used_or_rejected_naming_both() {
+        for o in OPTIONS.iter().filter(|o| o.scope == Scope::Method) {
+            for m in MethodKind::ALL {
+                let s = format!("{m},{}={}", o.name, o.example);
+                match s.parse::<MethodSpec>() {
+                    Ok(spec) => {
+                        assert!(o.applies_to.contains(&m), "{s} accepted");
+                        let resolved =
+                            options::Options { method: spec.options, ..options::Options::defaults() };
+                        assert_eq!(o.value_in(&resolved).as_deref(), Some(o.example), "{s}");
+                    }
+                    Err(e) => {
+                        assert!(!o.applies_to.contains(&m), "{s}: {e}");
+                        assert!(e.contains(&format!("{} does not apply to {m}", o.name)), "{s}: {e}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn chunks_grow_geometrically() {
         let mut done = 0;
         let mut samples = 0;
