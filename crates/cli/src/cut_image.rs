@@ -12,11 +12,9 @@
 
 use anyhow::{Context, Result};
 use haze_engine::methods::Method;
-use haze_manylight::integrators::{CutSizeProbe, CutStrategy};
-use haze_render::progressive::{render, RenderSettings};
+use haze_manylight::integrators::CutStrategy;
 use haze_scene::Scene;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 /// Inferno colour map, sampled at five points (matplotlib's `inferno` at 0, 1/4, 1/2, 3/4, 1).
 const INFERNO: [[f32; 3]; 5] =
@@ -39,19 +37,8 @@ pub fn legend_height(height: usize) -> usize {
 /// first pass) with `method`'s lightcuts integrator, recording the mean cut size per camera
 /// segment of each pixel, and writes the heat map to `path`.
 pub fn write(method: &Method, scene: &Scene, seed: u64, max_cut: u32, path: &Path) -> Result<()> {
-    let stochastic = match method {
-        Method::VrlLightcuts(i) => i.settings.strategy == CutStrategy::Stochastic,
-        Method::VplLightcuts(i) => i.settings.strategy == CutStrategy::Stochastic,
-        _ => false,
-    };
-    let settings = RenderSettings { spp: 1, seed, ..Default::default() };
-    let cancel = AtomicBool::new(false);
-    let out = match method {
-        Method::VrlLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
-        Method::VplLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
-        _ => anyhow::bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts)"),
-    };
-    let sizes: Vec<f32> = out.film.mean(None).chunks(3).map(|p| p[0]).collect();
+    let sizes = method.cut_sizes(scene, seed)?;
+    let stochastic = method.cut_strategy() == Some(CutStrategy::Stochastic);
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     let scale = if stochastic { 1.0 } else { max_cut.max(1) as f32 };
     let lh = legend_height(h);
