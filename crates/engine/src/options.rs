@@ -466,7 +466,7 @@ pub const OPTIONS: &[OptionSpec] = &[
     OptionSpec {
         name: "cut_size",
         kind: Kind::Count { max: 1 << 20 },
-        default: Default::Value("8"),
+        default: Default::Value("1"),
         help: "Nodes in the stochastic cut: lights sampled per camera segment (the default is \
                measured: docs/lightcuts.md).",
         applies_to: MethodKind::LIGHTCUTS,
