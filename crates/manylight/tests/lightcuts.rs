@@ -18,14 +18,13 @@ use haze_manylight::tree::cut::CutSettings;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator};
 use haze_scene::{load_file, LoadOptions, Scene};
+use haze_testkit::data::validation_scene;
 use haze_testkit::ztest::{pool_variance, z_test};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 fn load_small(name: &str, w: u32, h: u32) -> Scene {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("../../../shared/validation/scenes/{name}.xml"));
-    let mut scene = load_file(&p, &LoadOptions::default()).expect("validation scene loads");
+    let mut scene =
+        load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     scene.camera.width = w;
     scene.camera.height = h;
     scene
