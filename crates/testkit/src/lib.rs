@@ -5,4 +5,5 @@
 
 pub mod chi2;
 pub mod data;
+pub mod quadrature;
 pub mod ztest;
