@@ -1,7 +1,7 @@
 //! The many-light integrators `vrl` and `vpl`: each pass traces its own light paths
 //! ([`crate::lighttrace`]), then every camera ray sums emitted light, single scattering by
 //! next-event estimation ([`crate::single`]) and the contributions of all virtual lights of the
-//! pass (notes §1: `L = emitted + single + sum over virtual lights`, nothing counted twice).
+//! pass (`docs/theory.md` §2: `L = emitted + single + sum over virtual lights`, nothing counted twice).
 
 mod lightcuts;
 mod vpl;
