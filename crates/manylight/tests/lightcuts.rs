@@ -19,7 +19,7 @@ use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator};
 use haze_scene::{load_file, LoadOptions, Scene};
 use haze_testkit::data::validation_scene;
-use haze_testkit::ztest::{pool_variance, z_test};
+use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
 use std::sync::atomic::AtomicBool;
 
 fn load_small(name: &str, w: u32, h: u32) -> Scene {
@@ -43,6 +43,18 @@ fn film<I: Integrator>(scene: &Scene, integrator: &I, passes: u32, seed: u64) ->
     let out = render(scene, integrator, &settings, &AtomicBool::new(false), |_| {});
     assert_eq!(out.invalid_samples, 0);
     out.film
+}
+
+/// Per-pixel z-test of the `multiple` component of two `w x h` films (variances pooled over 3x3
+/// pixels, of the mean).
+fn z_test_multiple(a: &Film, b: &Film, w: usize, h: usize) -> ZTestReport {
+    let v = |f: &Film| -> Vec<f32> {
+        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
+            .iter()
+            .map(|x| x / f.samples as f32)
+            .collect()
+    };
+    z_test(&a.mean(Some(Component::Multiple)), &v(a), &b.mean(Some(Component::Multiple)), &v(b), 0.01)
 }
 
 #[test]
@@ -84,15 +96,7 @@ fn default_epsilon_agrees_with_brute_force() {
             .unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 300), 6).unwrap(), passes, 6);
-    let (w, h) = (24, 18);
-    let v = |f: &Film| -> Vec<f32> {
-        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
-            .iter()
-            .map(|x| x / f.samples as f32)
-            .collect()
-    };
-    let r =
-        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts (eps 0.02) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     // Image means: pixels of a pass are correlated, so compare with a loose per-pixel-based
@@ -112,15 +116,7 @@ fn tight_bound_agrees_with_brute_force() {
     let lc = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(&scene, 4000), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 4000), 6).unwrap(), passes, 6);
-    let (w, h) = (24, 18);
-    let v = |f: &Film| -> Vec<f32> {
-        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
-            .iter()
-            .map(|x| x / f.samples as f32)
-            .collect()
-    };
-    let r =
-        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts (tight bound) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");

@@ -129,3 +129,29 @@ pub fn table_header() -> String {
         "-".repeat(92)
     )
 }
+
+// -- Shared test scaffolding ------------------------------------------------------------------
+
+/// A random camera segment for the degenerate-configuration tests: origin in `[-2, 2]^3`,
+/// uniform direction, length at a random scale (`1e-4`, 1 or 100), zero for every 11th `i`.
+/// Returns the segment and its scale.
+pub fn degenerate_camera_segment(s: &mut Sampler, i: u32) -> (haze_manylight::vrl::Segment, f32) {
+    let c = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+    let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - Vec3::splat(2.0);
+    let scale = [1e-4f32, 1.0, 100.0][(s.next_u32() % 3) as usize];
+    let len = if i % 11 == 0 { 0.0 } else { scale * (0.01 + 2.0 * s.next_1d()) };
+    (haze_manylight::vrl::Segment::new(o, c, len), scale)
+}
+
+/// Prints the rows of a negative-control run under `title` and checks that every `must_pass`
+/// row passed and every `must_fail` group failed (named in its message).
+pub fn report_controls(title: &str, must_pass: &[(bool, String)], must_fail: &[(&[(bool, String)], &str)]) {
+    println!("\n{title}:\n{}", table_header());
+    for (_, row) in must_pass.iter().chain(must_fail.iter().flat_map(|(rows, _)| rows.iter())) {
+        println!("{row}");
+    }
+    assert!(must_pass.iter().all(|r| r.0), "the manual estimator with the right pdf must pass");
+    for (rows, what) in must_fail {
+        assert!(rows.iter().all(|r| !r.0), "the check failed to detect {what}");
+    }
+}
