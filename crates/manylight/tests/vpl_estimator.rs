@@ -162,14 +162,11 @@ fn run(
 fn vpl_estimator_matches_quadrature() {
     let cases = cases();
     let rows = run(&cases, |c, u| c.estimate(u), |c| c.clamp, 4_000_000);
-    println!(
-        "\nVPL estimator vs adaptive quadrature (green channel shown; max over RGB)\n{}",
-        table_header()
+    report_rows(
+        "VPL estimator vs adaptive quadrature (green channel shown; max over RGB)",
+        &rows,
+        "some VPL configurations failed (see table)",
     );
-    for (_, row) in &rows {
-        println!("{row}");
-    }
-    assert!(rows.iter().all(|r| r.0), "some VPL configurations failed (see table)");
 }
 
 #[test]

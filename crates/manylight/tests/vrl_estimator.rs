@@ -213,14 +213,11 @@ fn vrl_estimator_matches_double_integral() {
         assert_eq!(smp.is_uniform(), parallel, "{}: the case does not test what it says", c.name);
     }
     let rows = run(&cases, |c, u| c.estimate(u), 4_000_000);
-    println!(
-        "\nVRL estimator vs adaptive double integral (green channel shown; max over RGB)\n{}",
-        table_header()
+    report_rows(
+        "VRL estimator vs adaptive double integral (green channel shown; max over RGB)",
+        &rows,
+        "some VRL configurations failed (see table)",
     );
-    for (_, row) in &rows {
-        println!("{row}");
-    }
-    assert!(rows.iter().all(|r| r.0), "some VRL configurations failed (see table)");
 }
 
 /// `vrl_integrand` (the library's `f32` integrand) agrees with the independent `f64` one.

@@ -174,61 +174,62 @@ thread_local! {
     static CUT_TALLY: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
 }
 
-struct VrlOracle<'a> {
+/// What both oracles know of the camera segment being cut for.
+#[derive(Clone, Copy)]
+struct SegmentContext<'a> {
     scene: &'a Scene,
-    tree: &'a LightTree,
-    cones: &'a [LineCone],
-    dir_cones: &'a [DirCone],
     cs: &'a CameraSegment,
     cam_medium: &'a VrlMedium,
-    lights: &'a [Vrl],
     media: &'a [VrlMedium],
     bound: BoundContext,
     key: u64,
 }
 
+struct VrlOracle<'a> {
+    ctx: SegmentContext<'a>,
+    tree: &'a LightTree,
+    cones: &'a [LineCone],
+    dir_cones: &'a [DirCone],
+    lights: &'a [Vrl],
+}
+
 impl ClusterOracle for VrlOracle<'_> {
     fn bound(&self, index: u32, _node: &Node) -> f32 {
-        self.bound.vrl_node(self.tree, index, self.lights, self.cones, self.dir_cones)
+        self.ctx.bound.vrl_node(self.tree, index, self.lights, self.cones, self.dir_cones)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vrl = &self.lights[light as usize];
-        let scene = self.scene;
+        let SegmentContext { scene, cs, cam_medium, media, key, .. } = self.ctx;
         sample_vrl_contribution(
-            &self.cs.seg,
-            self.cam_medium,
+            &cs.seg,
+            cam_medium,
             vrl,
-            &self.media[vrl.medium as usize],
-            light_uniforms(self.key, light),
+            &media[vrl.medium as usize],
+            light_uniforms(key, light),
             |y, x| connect(scene, vrl.medium, y, x),
         )
     }
 }
 
 struct VplOracle<'a> {
-    scene: &'a Scene,
+    ctx: SegmentContext<'a>,
     tree: &'a LightTree,
-    cs: &'a CameraSegment,
-    cam_medium: &'a VrlMedium,
     lights: &'a [Vpl],
-    media: &'a [VrlMedium],
-    bound: BoundContext,
-    key: u64,
 }
 
 impl ClusterOracle for VplOracle<'_> {
     fn bound(&self, _index: u32, node: &Node) -> f32 {
-        self.bound.vpl_in_tree(self.tree, node, self.lights)
+        self.ctx.bound.vpl_in_tree(self.tree, node, self.lights)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
         let vpl = &self.lights[light as usize];
-        let scene = self.scene;
+        let SegmentContext { scene, cs, cam_medium, media, key, .. } = self.ctx;
         sample_vpl_contribution(
-            &self.cs.seg,
-            self.cam_medium,
+            &cs.seg,
+            cam_medium,
             vpl,
-            &self.media[vpl.medium as usize].phase,
-            light_uniforms(self.key, light).x,
+            &media[vpl.medium as usize].phase,
+            light_uniforms(key, light).x,
             None,
             |y, x| connect(scene, vpl.medium, y, x),
         )
@@ -337,35 +338,22 @@ impl Integrator for LightcutsIntegrator {
                     camera_phase: cam_medium.phase,
                     light_phase: pass.light_phase,
                 };
+                let ctx = SegmentContext { scene, cs, cam_medium, media: &pass.media, bound, key };
                 let (value, stats) = match self.kind {
                     LightKind::Vrl => {
                         let f = &pass.vrls[group];
                         let mut o = VrlOracle {
-                            scene,
+                            ctx,
                             tree: &f.tree,
                             cones: &f.cones,
                             dir_cones: &f.dir_cones,
-                            cs,
-                            cam_medium,
                             lights: &f.lights,
-                            media: &pass.media,
-                            bound,
-                            key,
                         };
                         lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
                     }
                     LightKind::Vpl => {
                         let f = &pass.vpls[group];
-                        let mut o = VplOracle {
-                            scene,
-                            tree: &f.tree,
-                            cs,
-                            cam_medium,
-                            lights: &f.lights,
-                            media: &pass.media,
-                            bound,
-                            key,
-                        };
+                        let mut o = VplOracle { ctx, tree: &f.tree, lights: &f.lights };
                         lightcut(&f.tree, &mut o, &self.settings.cut, scratch)
                     }
                 };

@@ -155,3 +155,12 @@ pub fn report_controls(title: &str, must_pass: &[(bool, String)], must_fail: &[(
         assert!(rows.iter().all(|r| !r.0), "the check failed to detect {what}");
     }
 }
+
+/// Prints `rows` as a table under `title` and checks that every row passed.
+pub fn report_rows(title: &str, rows: &[(bool, String)], failure: &str) {
+    println!("\n{title}\n{}", table_header());
+    for (_, row) in rows {
+        println!("{row}");
+    }
+    assert!(rows.iter().all(|r| r.0), "{failure}");
+}
