@@ -36,7 +36,7 @@ mkdir -p docs/results
   echo "Metrics (crates/render/src/metrics.rs): RMSE over pixels and channels; SMAPE ="
   echo "100 mean |a-r|/(|a|+|r|), entries where both are 0 skipped (range 0-100); relMSE ="
   echo "mean (a-r)^2/(r^2+0.01). The paper's numbers (Vibert et al. 2019, seed slides) are in"
-  echo "\`../shared/notes/vrl-lightcuts.md\` §6: RMSE 2.70 (VRL lightcuts 100k) vs 5.46 (VRLs 10k) vs 9.01"
+  echo "[theory.md](theory.md#10-the-papers-reported-numbers) §10: RMSE 2.70 (VRL lightcuts 100k) vs 5.46 (VRLs 10k) vs 9.01"
   echo "(VPL lightcuts 1M); its scenes and radiance scale differ, so only ratios compare."
 } > "$DOC.tmp"
 

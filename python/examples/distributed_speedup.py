@@ -15,7 +15,7 @@ import sys
 import time
 
 HERE = pathlib.Path(__file__).resolve()
-DEFAULT_SCENE = HERE.parents[3] / "shared" / "validation" / "scenes" / "hg-box.xml"
+DEFAULT_SCENE = HERE.parents[2] / "tests" / "data" / "validation" / "scenes" / "hg-box.xml"
 
 
 def one(scene, workers, passes, vrls):

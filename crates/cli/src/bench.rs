@@ -15,7 +15,9 @@ use std::time::Instant;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scenes to measure (default: the shared validation scenes).
+    /// Scenes to measure (default: the validation scenes shipped with haze,
+    /// `tests/data/validation/scenes`, looked for in the current directory and beside the
+    /// executable).
     pub scenes: Vec<PathBuf>,
     /// volpath, vrl: samples per pixel per scene (default 64).
     #[arg(long)]
@@ -57,14 +59,16 @@ pub struct BenchArgs {
 }
 
 /// Mitsuba 3.9.1 `llvm_ad_rgb` volpath on the validation scenes on the same 2-core machine
-/// (`../shared/validation/README.md`): 128x96 pixels at 16384 spp in this many seconds.
+/// (`tests/data/validation/README.md`): 128x96 pixels at 16384 spp in this many seconds.
 const MITSUBA_SECONDS: &[(&str, f64)] = &[("hg-box.xml", 31.0), ("foggy-room.xml", 72.0)];
 
 pub fn run(args: BenchArgs) -> Result<()> {
     set_threads(args.threads)?;
     let scenes = if args.scenes.is_empty() {
-        let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/validation/scenes");
-        vec![base.join("hg-box.xml"), base.join("foggy-room.xml")]
+        vec![
+            shipped("tests/data/validation/scenes/hg-box.xml")?,
+            shipped("tests/data/validation/scenes/foggy-room.xml")?,
+        ]
     } else {
         args.scenes.clone()
     };
@@ -114,6 +118,29 @@ pub fn run(args: BenchArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// A file shipped with haze (`rel` is its path in the repository), found in the current
+/// directory, beside the executable, or in the directories above it (`target/release/haze` in
+/// a clone), or in `share/haze` under one of those (an installed binary); never a path compiled
+/// in from the source tree.
+fn shipped(rel: &str) -> Result<PathBuf> {
+    let mut roots = vec![PathBuf::from(".")];
+    if let Ok(exe) = std::env::current_exe() {
+        for dir in exe.ancestors().skip(1).take(4) {
+            roots.push(dir.to_path_buf());
+            roots.push(dir.join("share/haze"));
+        }
+    }
+    if let Some(found) = roots.iter().map(|r| r.join(rel)).find(|p| p.is_file()) {
+        return Ok(found);
+    }
+    let looked: Vec<String> = roots.iter().map(|r| r.display().to_string()).collect();
+    anyhow::bail!(
+        "haze bench: the default scene {rel} was not found (looked in {}); run it from a clone of \
+         the haze repository or give the scene files as arguments",
+        looked.join(", ")
+    )
 }
 
 /// Light-tree build times (3-step agglomerative vs median split, 1 and all threads, for 10k,
@@ -252,7 +279,7 @@ fn cut_growth() -> Result<()> {
     use haze_manylight::integrators::{CutStrategy, LightcutSettings, LightcutsIntegrator, Vrls};
     use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::cut::CutSettings;
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/bench-smoke-room.xml");
+    let path = shipped("scenes/bench-smoke-room.xml")?;
     let scene = load_scene(&path, &["res=32".to_string()])?;
     let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();

@@ -1,6 +1,7 @@
 //! `haze compare` (equal-time comparison of methods against a reference) and `haze reference`.
 
 use crate::render_cmd::{load_scene, render_and_write, set_threads, Outputs};
+use crate::results::{CurvePoint, MethodLabel, MethodResult};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use haze_engine::options::{self, Scope, OPTIONS};
@@ -148,26 +149,6 @@ pub struct CompareArgs {
     pub exposure: f32,
 }
 
-/// The error of a method's image at one moment of its run.
-#[derive(Clone, Copy, Debug)]
-pub struct CurvePoint {
-    pub seconds: f64,
-    pub metrics: Metrics,
-}
-
-/// What one method produced in its time budget.
-pub struct MethodResult {
-    pub spec: MethodSpec,
-    pub seconds: f64,
-    pub passes: u32,
-    pub metrics: Metrics,
-    pub mean_cut: Option<f64>,
-    /// Row-major linear RGB.
-    pub image: Vec<f32>,
-    /// Error at the end of passes (geometrically spaced), for the convergence plot.
-    pub curve: Vec<CurvePoint>,
-}
-
 /// Passes to render before the next error sample: every pass at first, then about 25% more
 /// passes each time, so a run has O(log passes) samples, evenly spread on a log time axis.
 fn next_chunk(passes_done: u32) -> u32 {
@@ -220,7 +201,7 @@ pub fn run_method(
     let image = film.mean(None);
     let metrics = Metrics::compute(&image, reference, None);
     Ok(MethodResult {
-        spec: spec.clone(),
+        spec: MethodLabel { text: spec.to_string(), file_stem: spec.file_stem(), lights: spec.light_count() },
         seconds,
         passes,
         metrics,

@@ -5,6 +5,7 @@ mod compare;
 mod cut_image;
 mod render_cmd;
 mod report;
+mod results;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

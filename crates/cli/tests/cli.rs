@@ -12,8 +12,9 @@ fn repo(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
 }
 
+/// The test data shipped in the repository (`tests/data`, e.g. `validation/scenes/...`).
 fn shared(rel: &str) -> PathBuf {
-    repo("../shared").join(rel)
+    repo("tests/data").join(rel)
 }
 
 fn tmp(name: &str) -> PathBuf {

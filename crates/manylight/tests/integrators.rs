@@ -1,4 +1,4 @@
-//! The `vrl` and `vpl` integrators against `volpath`, component by component, on the shared
+//! The `vrl` and `vpl` integrators against `volpath`, component by component, on the
 //! validation scenes (rendered small so the test takes seconds), and the normalisation of light
 //! tracing.
 //!
@@ -15,17 +15,16 @@ use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator, VolPath};
 use haze_scene::{load_file, LoadOptions, Scene};
+use haze_testkit::data::validation_scene;
 use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 const W: u32 = 24;
 const H: u32 = 18;
 
 fn load_small(name: &str) -> Scene {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("../../../shared/validation/scenes/{name}.xml"));
-    let mut scene = load_file(&p, &LoadOptions::default()).expect("validation scene loads");
+    let mut scene =
+        load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     scene.camera.width = W;
     scene.camera.height = H;
     scene
@@ -218,14 +217,9 @@ fn hg_box_stochastic_lightcuts_match_brute_force() {
 fn check_stochastic_against_mitsuba(name: &str, paths: u64, passes: u32) {
     use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
     use haze_render::image_io::RgbImage;
-    let p =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../../shared/validation/refs/{name}.exr"));
-    let reference = RgbImage::read_exr(&p).expect("reference EXR");
-    let scene = {
-        let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join(format!("../../../shared/validation/scenes/{name}.xml"));
-        load_file(&p, &LoadOptions::default()).expect("validation scene loads")
-    };
+    let reference = RgbImage::read_exr(&haze_testkit::data::validation(&format!("refs/{name}.exr")))
+        .expect("reference EXR");
+    let scene = load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     let (w, h) = (reference.width, reference.height);
     let ml = settings(&scene, paths);
     let lc = LightcutSettings::default();

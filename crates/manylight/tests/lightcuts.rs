@@ -18,14 +18,13 @@ use haze_manylight::tree::cut::CutSettings;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator};
 use haze_scene::{load_file, LoadOptions, Scene};
-use haze_testkit::ztest::{pool_variance, z_test};
-use std::path::PathBuf;
+use haze_testkit::data::validation_scene;
+use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
 use std::sync::atomic::AtomicBool;
 
 fn load_small(name: &str, w: u32, h: u32) -> Scene {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("../../../shared/validation/scenes/{name}.xml"));
-    let mut scene = load_file(&p, &LoadOptions::default()).expect("validation scene loads");
+    let mut scene =
+        load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     scene.camera.width = w;
     scene.camera.height = h;
     scene
@@ -44,6 +43,18 @@ fn film<I: Integrator>(scene: &Scene, integrator: &I, passes: u32, seed: u64) ->
     let out = render(scene, integrator, &settings, &AtomicBool::new(false), |_| {});
     assert_eq!(out.invalid_samples, 0);
     out.film
+}
+
+/// Per-pixel z-test of the `multiple` component of two `w x h` films (variances pooled over 3x3
+/// pixels, of the mean).
+fn z_test_multiple(a: &Film, b: &Film, w: usize, h: usize) -> ZTestReport {
+    let v = |f: &Film| -> Vec<f32> {
+        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
+            .iter()
+            .map(|x| x / f.samples as f32)
+            .collect()
+    };
+    z_test(&a.mean(Some(Component::Multiple)), &v(a), &b.mean(Some(Component::Multiple)), &v(b), 0.01)
 }
 
 #[test]
@@ -91,15 +102,7 @@ fn bound_cut_default_epsilon_agrees_with_brute_force() {
     let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 300), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 300), 6).unwrap(), passes, 6);
-    let (w, h) = (24, 18);
-    let v = |f: &Film| -> Vec<f32> {
-        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
-            .iter()
-            .map(|x| x / f.samples as f32)
-            .collect()
-    };
-    let r =
-        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts (eps 0.02) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     // Image means: pixels of a pass are correlated, so compare with a loose per-pixel-based
@@ -120,15 +123,7 @@ fn tight_bound_agrees_with_brute_force() {
     let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 4000), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 4000), 6).unwrap(), passes, 6);
-    let (w, h) = (24, 18);
-    let v = |f: &Film| -> Vec<f32> {
-        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
-            .iter()
-            .map(|x| x / f.samples as f32)
-            .collect()
-    };
-    let r =
-        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts (tight bound) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");

@@ -4,10 +4,11 @@
 use crate::accel::Accel;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
-use crate::lights::EmitterTables;
+use crate::emitter_tables::EmitterTables;
+use crate::interaction::SurfaceInteraction;
 use crate::medium::{Medium, MediumId};
 use crate::shape::Shape;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use haze_core::Ray;
 use std::path::PathBuf;
 
@@ -29,21 +30,6 @@ impl Default for IntegratorSpec {
     fn default() -> Self {
         IntegratorSpec { name: "volpath".into(), max_depth: -1, rr_depth: 5, hide_emitters: false }
     }
-}
-
-/// A ray-surface hit.
-#[derive(Clone, Copy, Debug)]
-pub struct SurfaceInteraction {
-    pub t: f32,
-    pub p: Vec3,
-    /// Geometric normal, on the shape's exterior side (flipped with `flip_normals`).
-    pub n: Vec3,
-    /// Shading normal (interpolated vertex normals if the mesh has them, else `n`), on the same
-    /// side as `n`.
-    pub ns: Vec3,
-    pub uv: Vec2,
-    pub shape: u32,
-    pub prim: u32,
 }
 
 pub struct Scene {

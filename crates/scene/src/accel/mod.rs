@@ -7,7 +7,7 @@ mod watertight;
 
 pub use watertight::WatertightRay;
 
-use crate::scene::SurfaceInteraction;
+use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
 use crate::shape::{Geometry, Shape};
 use glam::{Mat4, Vec2, Vec3, Vec3A};

@@ -17,6 +17,7 @@
 
 mod bsdfs;
 mod builder;
+mod context;
 mod document;
 mod emitters;
 mod integrator;
@@ -29,6 +30,7 @@ mod sensor;
 mod shapes;
 mod textures;
 mod transform;
+mod values;
 
 pub use bsdfs::{ior_by_name, NAMED_IORS};
 pub use plugins::supported_plugins;

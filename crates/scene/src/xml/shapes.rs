@@ -1,7 +1,7 @@
 //! Shape plugins `sphere`, `cube`, `rectangle`, `disk`, `obj` and `ply`, with their BSDF,
 //! interior/exterior media and area emitter.
 
-use super::builder::Builder;
+use super::context::Builder;
 use super::document::Element;
 use super::params::Params;
 use super::transform::uniform_scale;

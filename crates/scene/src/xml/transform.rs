@@ -3,7 +3,7 @@
 //! previous ones: `M = op * M`).
 
 use super::document::Element;
-use super::params::{parse_float, tokens, vector3};
+use super::values::{parse_float, tokens, vector3};
 use super::LoadError;
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
