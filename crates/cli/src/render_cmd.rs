@@ -185,6 +185,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--spp-per-pass must be at least 1");
     }
     let scene = load_scene(&args.scene, &args.define)?;
+    if let Some(w) = scene.integrator.path_cap_warning() {
+        eprintln!("warning: {w}");
+    }
     let name = args.integrator.clone().unwrap_or_else(|| scene.integrator.name.clone());
     if args.cut_image.is_some() && !name.ends_with("_lightcuts") {
         bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts), not '{name}'");
