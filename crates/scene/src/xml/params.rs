@@ -218,6 +218,9 @@ impl<'a> Params<'a> {
         for (i, k) in ["x", "y", "z"].iter().enumerate() {
             if let Some(v) = el.attr(k) {
                 p[i] = parse_float(v).map_err(|m| el.error(format!("in '{k}': {m}")))?;
+                if !p[i].is_finite() {
+                    return Err(el.error(format!("'{k}' must be a finite number, got '{v}'")));
+                }
             }
         }
         Ok(Some(p))
@@ -295,6 +298,11 @@ fn expect_tag(el: &Element, name: &str, tags: &[&str]) -> Result<(), LoadError> 
 fn float_value(el: &Element, name: &str) -> Result<f32, LoadError> {
     expect_tag(el, name, &["float", "integer"])?;
     let v = el.required_attr("value")?;
+    if el.tag == "integer" {
+        // As Mitsuba 3: an <integer> holds an integer, not any number.
+        let i: i64 = v.trim().parse().map_err(|_| el.error(format!("cannot parse '{v}' as an integer")))?;
+        return Ok(i as f32);
+    }
     let x = parse_float(v).map_err(|m| el.error(m))?;
     finite(el, name, x)
 }
@@ -373,13 +381,17 @@ fn wavelength_list(el: &Element, v: &str, kind: SpectrumKind) -> Result<Rgb, Loa
     Ok(Rgb(spectrum_to_linear_srgb(&wavelengths, &values, kind)))
 }
 
-/// Three numbers from `value`; one number means all three (Mitsuba 3's `parse_named_vector`).
+/// Three finite numbers from `value`; one number means all three (Mitsuba 3's
+/// `parse_named_vector`).
 pub(super) fn vector3(el: &Element, value: &str) -> Result<Vec3, LoadError> {
     let c = tokens(value)
         .iter()
         .map(|s| parse_float(s))
         .collect::<Result<Vec<f32>, String>>()
         .map_err(|m| el.error(m))?;
+    if let Some(x) = c.iter().find(|x| !x.is_finite()) {
+        return Err(el.error(format!("'{value}' holds a number that is not finite ({x})")));
+    }
     match c[..] {
         [v] => Ok(Vec3::splat(v)),
         [x, y, z] => Ok(Vec3::new(x, y, z)),

@@ -39,6 +39,7 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), Load
         }
         _ => Geometry::Mesh(mesh_file(b, &p, &to_world, flip_normals)?),
     };
+    check_extent(&p, &geometry)?;
 
     let mut bsdf: Option<Bsdf> = None;
     let mut interior: Option<MediumId> = None;
@@ -128,6 +129,35 @@ fn sphere(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, L
         p.error_at("to_world", "a sphere's to_world may only rotate, translate and scale uniformly")
     })?;
     Ok(Geometry::Sphere { center: to_world.transform_point3(center), radius: radius * scale, flip_normals })
+}
+
+/// Geometry must lie within `MAX_COORDINATE` of the origin (the BVH cannot hold larger
+/// coordinates, and f32 has no precision left for rays there) and be finite.
+fn check_extent(p: &Params, geometry: &Geometry) -> Result<(), LoadError> {
+    use crate::accel::MAX_COORDINATE;
+    let largest = match geometry {
+        Geometry::Mesh(m) => m.positions.iter().map(|v| v.abs().max_element()).fold(0.0f32, |a, b| {
+            if b.is_nan() {
+                f32::NAN
+            } else {
+                a.max(b)
+            }
+        }),
+        Geometry::Sphere { center, radius, .. } => center.abs().max_element() + radius,
+        Geometry::Disk { to_world, .. } => {
+            let o = to_world.transform_point3(Vec3::ZERO);
+            let r =
+                to_world.transform_vector3(Vec3::X).length() + to_world.transform_vector3(Vec3::Y).length();
+            o.abs().max_element() + r
+        }
+    };
+    if largest.is_nan() || largest > MAX_COORDINATE {
+        return Err(p.element().error(format!(
+            "the shape reaches coordinates of {largest:e}; haze takes geometry within {MAX_COORDINATE:e} \
+             of the origin (scale the scene down)"
+        )));
+    }
+    Ok(())
 }
 
 fn require_invertible(p: &Params, to_world: &Mat4) -> Result<Mat3, LoadError> {
