@@ -366,7 +366,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
             h
         );
     }
-    let budget = Duration::from_secs_f64(args.time);
+    let budget = crate::limits::seconds("--time", args.time)?;
     let mut results = Vec::new();
     for spec in &args.methods {
         eprintln!("{spec}: rendering for {:.1} s", args.time);

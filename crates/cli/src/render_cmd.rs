@@ -20,7 +20,8 @@ use std::time::Duration;
 pub struct RenderArgs {
     /// Scene file (Mitsuba 3 XML).
     pub scene: PathBuf,
-    /// Output EXR path; a PNG preview is written next to it.
+    /// Output image: `.exr` (linear RGB, with a PNG preview written next to it) or `.png` (the
+    /// preview only). Other extensions, and any file the scene reads, are refused.
     #[arg(short, long, default_value = "haze.exr")]
     pub output: PathBuf,
     /// Samples per pixel (default: the scene's sampler `sample_count`).
@@ -108,6 +109,7 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
         if t == 0 {
             bail!("--threads must be at least 1");
         }
+        crate::limits::check_threads(t)?;
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
@@ -130,7 +132,7 @@ fn install_interrupt_handler() -> Arc<AtomicBool> {
     flag
 }
 
-fn component_path(out: &Path, comp: Component) -> PathBuf {
+pub(crate) fn component_path(out: &Path, comp: Component) -> PathBuf {
     let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
     out.with_file_name(format!("{stem}_{}.exr", comp.name()))
 }
@@ -184,7 +186,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.spp_per_pass == 0 {
         bail!("--spp-per-pass must be at least 1");
     }
-    let scene = load_scene(&args.scene, &args.define)?;
+    let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
+    let outputs = crate::output::check_render_outputs(&args, &inputs)?;
+    crate::limits::check_render(&args, &scene)?;
     if let Some(w) = scene.integrator.path_cap_warning() {
         eprintln!("warning: {w}");
     }
@@ -194,7 +198,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let settings = RenderSettings {
         spp: if args.time.is_some() { 0 } else { args.spp.unwrap_or(scene.spp) },
-        time_limit: args.time.map(Duration::from_secs_f64),
+        time_limit: args.time.map(|t| crate::limits::seconds("--time", t)).transpose()?,
         seed: args.seed,
         spp_per_pass: args.spp_per_pass,
         components: args.components,
@@ -221,7 +225,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(s) = summary {
         eprintln!("{s}");
     }
-    report_and_write(&args, &scene, &name, &output)?;
+    report_and_write(&args, &scene, &name, &output, &outputs)?;
     if let Some(path) = &args.cut_image {
         crate::cut_image::write(&method, &scene, args.seed, args.max_cut, path)?;
     }
@@ -244,10 +248,19 @@ fn progress_bar(settings: &RenderSettings, quiet: bool) -> ProgressBar {
     bar
 }
 
-fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOutput) -> Result<()> {
+fn report_and_write(
+    args: &RenderArgs,
+    scene: &Scene,
+    name: &str,
+    out: &RenderOutput,
+    outputs: &crate::output::Outputs,
+) -> Result<()> {
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     if out.film.samples == 0 {
+        if args.time.is_some() && !out.interrupted {
+            bail!("the --time budget ended before the first pass did; nothing written (give more time)");
+        }
         bail!("no samples were rendered (interrupted before the first pass ended); nothing written");
     }
     let secs = out.elapsed.as_secs_f64();
@@ -262,6 +275,7 @@ fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOu
         samples as f64 / secs.max(1e-9) * 1e-6,
         if out.interrupted { ", interrupted" } else { "" }
     );
+    crate::limits::check_invalid_samples(name, out.invalid_samples, samples, &args.scene)?;
     if out.invalid_samples > 0 {
         eprintln!("warning: {} samples were NaN or infinite and were discarded", out.invalid_samples);
     }
@@ -269,10 +283,15 @@ fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOu
         RgbImage::new(w, h, data).write_exr(path).with_context(|| format!("writing {}", path.display()))
     };
     let full = RgbImage::new(w, h, out.film.mean(None));
-    full.write_exr(&args.output).with_context(|| format!("writing {}", args.output.display()))?;
-    let png = args.output.with_extension("png");
-    full.write_png(&png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
-    eprintln!("wrote {} and {}", args.output.display(), png.display());
+    let png = &outputs.png;
+    if let Some(exr) = &outputs.exr {
+        full.write_exr(exr).with_context(|| format!("writing {}", exr.display()))?;
+    }
+    full.write_png(png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
+    match &outputs.exr {
+        Some(exr) => eprintln!("wrote {} and {}", exr.display(), png.display()),
+        None => eprintln!("wrote {}", png.display()),
+    }
     if args.components {
         for comp in Component::ALL {
             let p = component_path(&args.output, comp);

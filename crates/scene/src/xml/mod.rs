@@ -78,9 +78,18 @@ impl fmt::Display for LoadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}:{}: ", self.file.display(), self.line, self.column)?;
         if !self.element.is_empty() {
-            write!(f, "{}: ", shorten_long_words(&self.element))?;
+            write!(f, "{}: ", one_line(&shorten_long_words(&self.element)))?;
         }
-        f.write_str(&shorten_long_words(&self.message))
+        f.write_str(&one_line(&shorten_long_words(&self.message)))
+    }
+}
+
+/// Messages quote text from the file, which may span lines: shown on one line.
+fn one_line(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains(['\n', '\r']) {
+        s.split(['\n', '\r']).map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" ").into()
+    } else {
+        s.into()
     }
 }
 
