@@ -80,7 +80,11 @@ pub fn render_settings(
     }
     Ok(RenderSettings {
         spp: if time.is_some() { 0 } else { spp.unwrap_or(scene.spp) },
-        time_limit: time.map(std::time::Duration::from_secs_f64),
+        // `from_secs_f64` panics on overflow (`time=1e20`).
+        time_limit: time
+            .map(std::time::Duration::try_from_secs_f64)
+            .transpose()
+            .map_err(|_| anyhow::anyhow!("time {:e} s is too large", time.unwrap_or(0.0)))?,
         seed,
         spp_per_pass,
         components,
