@@ -141,6 +141,11 @@ fn values_that_overflow_are_refused() {
             "haze takes geometry within",
         ),
         (
+            r#"<shape type="cube"><transform name="to_world"><scale value="1e-30"/></transform></shape>"#,
+            "too small for f32 ray tracing",
+        ),
+        (r#"<shape type="cube"><transform name="to_world"><scale z="0"/></transform></shape>"#, "singular"),
+        (
             r#"<emitter type="spot"><transform name="to_world"><scale value="0"/></transform></emitter>"#,
             "singular",
         ),

@@ -162,11 +162,30 @@ fn check_extent(p: &Params, geometry: &Geometry) -> Result<(), LoadError> {
 
 fn require_invertible(p: &Params, to_world: &Mat4) -> Result<Mat3, LoadError> {
     let l = Mat3::from_mat4(*to_world);
-    if l.determinant().abs() <= 1e-12 {
+    let d = l.as_dmat3();
+    let lengths = [d.x_axis.length(), d.y_axis.length(), d.z_axis.length()];
+    // Relative to the axes' lengths, so that a uniformly tiny (or huge) shape is not called
+    // flat; in f64, as products of tiny or huge lengths under- or overflow f32.
+    let volume = lengths.iter().product::<f64>();
+    if volume.is_nan() || volume <= 0.0 || (d.determinant().abs() / volume) <= 1e-9 {
         return Err(p.error_at("to_world", "to_world is singular (flattens the shape)"));
+    }
+    let smallest = lengths.iter().copied().fold(f64::INFINITY, f64::min) as f32;
+    if smallest < MIN_SCALE {
+        return Err(p.error_at(
+            "to_world",
+            format!(
+                "to_world scales the shape by {smallest:e}: too small for f32 ray tracing \
+                 (haze takes scales of at least {MIN_SCALE:e}; scale the scene up)"
+            ),
+        ));
     }
     Ok(l)
 }
+
+/// Smallest scale of a shape's `to_world` haze accepts: below it, ray offsets and f32
+/// spacing are as large as the shape.
+const MIN_SCALE: f32 = 1e-12;
 
 /// A planar shape needs its local x and y axes to stay independent.
 fn require_planar_rank(p: &Params, to_world: &Mat4) -> Result<(), LoadError> {
