@@ -46,9 +46,10 @@ const ORIGIN_BACKOFF: f32 = 2e-4;
 
 /// Largest coordinate magnitude of scene geometry haze accepts. obvhs stores node boxes as an
 /// origin plus power-of-two extents in an 8-bit exponent; extents beyond about `2^100` overflow
-/// it (a cube scaled by `1e30` panicked inside obvhs), and far below that, f32 spacing makes
-/// ray offsets and intersections meaningless.
-pub const MAX_COORDINATE: f32 = 1e15;
+/// it (a cube scaled by `1e30` panicked inside obvhs). The watertight triangle test multiplies
+/// three coordinate differences, which overflows f32 beyond about `7e12`; rays then pass
+/// through walls. `1e12` keeps every product finite for rays within the scene.
+pub const MAX_COORDINATE: f32 = 1e12;
 
 /// A triangle in BVH leaf order with the shape and primitive it came from.
 #[derive(Clone, Copy, Debug)]
@@ -368,6 +369,25 @@ mod tests {
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
             let h = accel.intersect(&shapes, &Ray::new(Vec3::ZERO, d)).expect("ray leaked out of the cube");
             assert!(h.n.dot(d) > 0.0);
+        }
+    }
+
+    /// Geometry up to `MAX_COORDINATE` builds (obvhs panicked on a cube scaled by 1e30, which
+    /// the loader now refuses) and rays from inside still find the walls.
+    #[test]
+    fn huge_coordinates_up_to_the_limit_build_and_hold() {
+        for scale in [1e-6f32, 1.0, 1e10, MAX_COORDINATE] {
+            let m = Mat4::from_scale(Vec3::splat(scale));
+            let shapes = vec![shape(Geometry::Mesh(cube_mesh(&m, false)))];
+            let accel = Accel::build(&shapes);
+            let mut s = Sampler::from_seed(3);
+            for _ in 0..2000 {
+                let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+                let h = accel
+                    .intersect(&shapes, &Ray::new(Vec3::ZERO, d))
+                    .unwrap_or_else(|| panic!("{scale}: leaked along {d}"));
+                assert!((h.t / scale - 1.0) > -1e-3 && h.t / scale < 1.8, "{scale}: t = {}", h.t);
+            }
         }
     }
 
