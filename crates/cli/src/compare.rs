@@ -278,7 +278,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
             h
         );
     }
-    let budget = Duration::from_secs_f64(args.time);
+    let budget = crate::limits::seconds("--time", args.time)?;
     let mut results = Vec::new();
     for spec in &args.methods {
         eprintln!("{spec}: rendering for {:.1} s", args.time);
@@ -353,12 +353,18 @@ pub struct ReferenceArgs {
 /// `haze reference`: `haze render --integrator volpath --time T`, through the engine.
 pub fn reference(args: ReferenceArgs) -> Result<()> {
     set_threads(args.threads)?;
-    let scene = load_scene(&args.scene, &args.define)?;
+    let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
     let (time, seed) = (args.time.to_string(), args.seed.to_string());
     let (kind, options) =
         prepare(&scene, Some("volpath"), &[("time", &time), ("seed", &seed)], Spelling::Flag)?;
-    let outputs =
-        Outputs { output: &args.output, exposure: 0.0, variance_out: None, cut_image: None, quiet: false };
+    let outputs = Outputs {
+        output: &args.output,
+        exposure: 0.0,
+        variance_out: None,
+        cut_image: None,
+        quiet: false,
+        inputs: &inputs,
+    };
     render_and_write(&args.scene, &scene, kind, &options, &outputs)
 }
 

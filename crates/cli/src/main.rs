@@ -3,6 +3,8 @@
 mod bench;
 mod compare;
 mod cut_image;
+mod limits;
+mod output;
 mod render_cmd;
 mod report;
 mod results;

@@ -18,7 +18,8 @@ use std::time::Duration;
 pub struct RenderArgs {
     /// Scene file (Mitsuba 3 XML).
     pub scene: PathBuf,
-    /// Output EXR path; a PNG preview is written next to it.
+    /// Output image: `.exr` (linear RGB, with a PNG preview written next to it) or `.png` (the
+    /// preview only). Other extensions, and any file the scene reads, are refused.
     #[arg(short, long, default_value = "haze.exr")]
     pub output: PathBuf,
     /// Worker threads (default: all cores). The image does not depend on it.
@@ -129,6 +130,7 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
         if t == 0 {
             bail!("--threads must be at least 1");
         }
+        crate::limits::check_threads(t)?;
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
@@ -151,14 +153,14 @@ fn install_interrupt_handler() -> Arc<AtomicBool> {
     flag
 }
 
-fn component_path(out: &Path, comp: Component) -> PathBuf {
+pub(crate) fn component_path(out: &Path, comp: Component) -> PathBuf {
     let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
     out.with_file_name(format!("{stem}_{}.exr", comp.name()))
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
     set_threads(args.threads)?;
-    let scene = load_scene(&args.scene, &args.define)?;
+    let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
     let (kind, options) = prepare(&scene, args.integrator.as_deref(), &args.options.pairs(), Spelling::Flag)
         .with_context(|| format!("{}", args.scene.display()))?;
     if args.cut_image.is_some() && !kind.is_lightcuts() {
@@ -170,6 +172,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         variance_out: args.variance_out.as_deref(),
         cut_image: args.cut_image.as_deref(),
         quiet: args.quiet,
+        inputs: &inputs,
     };
     render_and_write(&args.scene, &scene, kind, &options, &outputs)
 }
@@ -181,6 +184,8 @@ pub struct Outputs<'a> {
     pub variance_out: Option<&'a Path>,
     pub cut_image: Option<&'a Path>,
     pub quiet: bool,
+    /// Every file the scene reads (none of them may be overwritten).
+    pub inputs: &'a [PathBuf],
 }
 
 /// Renders `scene` (read from `path`) with `kind` and `options` (Ctrl-C finishes the current
@@ -192,6 +197,11 @@ pub fn render_and_write(
     options: &Options,
     outputs: &Outputs,
 ) -> Result<()> {
+    let plan = crate::output::check_render_outputs(outputs, options.components, outputs.inputs)?;
+    crate::limits::check_render(options, scene)?;
+    if let Some(w) = scene.integrator.path_cap_warning() {
+        eprintln!("warning: {w}");
+    }
     let settings = options.render_settings(scene);
     let described = options.describe(kind);
     if !described.is_empty() {
@@ -224,7 +234,7 @@ pub fn render_and_write(
             (total - trace - build).max(0.0)
         );
     }
-    report_and_write(outputs, options.components, scene, kind.name(), &output)?;
+    report_and_write(outputs, &plan, options.components, path, scene, kind.name(), &output)?;
     if let Some(path) = outputs.cut_image {
         let max_cut = options.method.lightcuts.cut.max_cut;
         crate::cut_image::write(&method, scene, options.seed, max_cut, path)?;
@@ -250,7 +260,9 @@ fn progress_bar(settings: &RenderSettings, quiet: bool) -> ProgressBar {
 
 fn report_and_write(
     args: &Outputs,
+    plan: &crate::output::Outputs,
     components: bool,
+    scene_path: &Path,
     scene: &Scene,
     name: &str,
     out: &RenderOutput,
@@ -258,6 +270,9 @@ fn report_and_write(
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     if out.film.samples == 0 {
+        if !out.interrupted {
+            bail!("the --time budget ended before the first pass did; nothing written (give more time)");
+        }
         bail!("no samples were rendered (interrupted before the first pass ended); nothing written");
     }
     let secs = out.elapsed.as_secs_f64();
@@ -272,6 +287,7 @@ fn report_and_write(
         samples as f64 / secs.max(1e-9) * 1e-6,
         if out.interrupted { ", interrupted" } else { "" }
     );
+    crate::limits::check_invalid_samples(name, out.invalid_samples, samples, scene_path)?;
     if out.invalid_samples > 0 {
         eprintln!("warning: {} samples were NaN or infinite and were discarded", out.invalid_samples);
     }
@@ -279,10 +295,15 @@ fn report_and_write(
         RgbImage::new(w, h, data).write_exr(path).with_context(|| format!("writing {}", path.display()))
     };
     let full = RgbImage::new(w, h, out.film.mean(None));
-    full.write_exr(args.output).with_context(|| format!("writing {}", args.output.display()))?;
-    let png = args.output.with_extension("png");
-    full.write_png(&png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
-    eprintln!("wrote {} and {}", args.output.display(), png.display());
+    let png = &plan.png;
+    if let Some(exr) = &plan.exr {
+        full.write_exr(exr).with_context(|| format!("writing {}", exr.display()))?;
+    }
+    full.write_png(png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
+    match &plan.exr {
+        Some(exr) => eprintln!("wrote {} and {}", exr.display(), png.display()),
+        None => eprintln!("wrote {}", png.display()),
+    }
     if components {
         for comp in Component::ALL {
             let p = component_path(args.output, comp);

@@ -98,6 +98,9 @@ pub enum Kind {
     NonNegative,
     /// A finite number > 0.
     Positive,
+    /// A time budget in seconds: at least a millisecond (no pass could finish in less) and at
+    /// most a year (a `Duration` of 1e20 s does not exist).
+    Seconds,
     /// One of these words.
     Choice(&'static [&'static str]),
     /// On or off (`true`/`false`); on the command line a flag without value.
@@ -175,6 +178,18 @@ impl Kind {
                 .filter(|x| *x > 0.0)
                 .map(Value::Float)
                 .ok_or_else(|| "must be a positive number".into()),
+            Kind::Seconds => {
+                const MIN: f64 = 1e-3;
+                const MAX: f64 = 365.0 * 24.0 * 3600.0;
+                match t.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0) {
+                    None => Err("must be a positive number of seconds".into()),
+                    Some(x) if x < MIN => {
+                        Err(format!("is too small a budget: no pass would finish (give at least {MIN} s)"))
+                    }
+                    Some(x) if x > MAX => Err(format!("is more than a year (give at most {MAX} s)")),
+                    Some(x) => Ok(Value::Float(x)),
+                }
+            }
             Kind::Choice(words) => words.iter().find(|w| **w == t).map(|w| Value::Word(w)).ok_or_else(|| {
                 let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
                 match quoted.split_last() {
@@ -197,7 +212,7 @@ impl Kind {
         match self {
             Kind::Count { .. } => "count",
             Kind::Integer => "integer",
-            Kind::NonNegative | Kind::Positive => "number",
+            Kind::NonNegative | Kind::Positive | Kind::Seconds => "number",
             Kind::Choice(_) => "choice",
             Kind::Flag => "flag",
         }
@@ -337,7 +352,7 @@ pub const OPTIONS: &[OptionSpec] = &[
     },
     OptionSpec {
         name: "time",
-        kind: Kind::Positive,
+        kind: Kind::Seconds,
         default: Default::Unset("off (render spp samples)"),
         help: "Render for this many seconds instead of a sample count (whole passes: the last pass \
                started in time is finished).",

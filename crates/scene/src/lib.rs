@@ -24,7 +24,7 @@ pub use emitter::Emitter;
 pub use envmap::EnvMap;
 pub use interaction::SurfaceInteraction;
 pub use medium::{Medium, MediumId};
-pub use scene::{IntegratorSpec, Scene};
+pub use scene::{depth_limit, IntegratorSpec, Scene, MAX_PATH_DEPTH};
 pub use shape::{Geometry, Shape, TriangleMesh};
 pub use texture::Texture;
 pub use xml::{load_file, load_file_with_sources, load_str, LoadError, LoadOptions};

@@ -219,6 +219,9 @@ impl<'a> Params<'a> {
         for (i, k) in ["x", "y", "z"].iter().enumerate() {
             if let Some(v) = el.attr(k) {
                 p[i] = parse_float(v).map_err(|m| el.error(format!("in '{k}': {m}")))?;
+                if !p[i].is_finite() {
+                    return Err(el.error(format!("'{k}' must be a finite number, got '{v}'")));
+                }
             }
         }
         Ok(Some(p))
@@ -296,6 +299,11 @@ fn expect_tag(el: &Element, name: &str, tags: &[&str]) -> Result<(), LoadError> 
 fn float_value(el: &Element, name: &str) -> Result<f32, LoadError> {
     expect_tag(el, name, &["float", "integer"])?;
     let v = el.required_attr("value")?;
+    if el.tag == "integer" {
+        // As Mitsuba 3: an <integer> holds an integer, not any number.
+        let i: i64 = v.trim().parse().map_err(|_| el.error(format!("cannot parse '{v}' as an integer")))?;
+        return Ok(i as f32);
+    }
     let x = parse_float(v).map_err(|m| el.error(m))?;
     finite(el, name, x)
 }

@@ -5,13 +5,17 @@ use super::document::Element;
 use super::LoadError;
 use glam::Vec3;
 
-/// Three numbers from `value`; one number means all three (Mitsuba 3's `parse_named_vector`).
+/// Three finite numbers from `value`; one number means all three (Mitsuba 3's
+/// `parse_named_vector`).
 pub(super) fn vector3(el: &Element, value: &str) -> Result<Vec3, LoadError> {
     let c = tokens(value)
         .iter()
         .map(|s| parse_float(s))
         .collect::<Result<Vec<f32>, String>>()
         .map_err(|m| el.error(m))?;
+    if let Some(x) = c.iter().find(|x| !x.is_finite()) {
+        return Err(el.error(format!("'{value}' holds a number that is not finite ({x})")));
+    }
     match c[..] {
         [v] => Ok(Vec3::splat(v)),
         [x, y, z] => Ok(Vec3::new(x, y, z)),
