@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md: for each benchmark scene (scenes/bench-*.xml), a long volpath
-# reference, an equal-time `haze compare` of volpath, vrl:10000, vrl_lightcuts:100000 and
-# vpl_lightcuts:1000000 (the paper's table), and RMSE vs number of lights for vrl and
-# vrl_lightcuts. HTML reports go to target/results/<scene>/report/index.html (OUT=...; not committed).
+# reference, an equal-time `haze compare` of volpath, vrl:10000, the paper's deterministic cut
+# (vrl_lightcuts:100000,cut=bound and vpl_lightcuts:1000000,cut=bound: the paper's table) and the
+# stochastic cut (vrl_lightcuts and vpl_lightcuts, the default --cut stochastic), and RMSE vs
+# number of lights for vrl and both cuts. HTML reports go to target/results/<scene>/report/index.html (OUT=...; not committed).
 #
 # Budgets come from the environment, so a quick check of the script is possible:
 #   REF_TIME=600 BUDGET=60 RES=128 scripts/results.sh      # the documented run (about 1.5 h)
@@ -50,10 +51,14 @@ for s in $SCENES; do
     "$HAZE" reference "$scene" -D res="$RES" --time "$REF_TIME" -o "$dir/reference.exr" >&2
   fi
   table=$("$HAZE" compare "$scene" -D res="$RES" --reference "$dir/reference.exr" --time "$BUDGET" \
-    --method volpath --method vrl:10000 --method vrl_lightcuts:100000 --method vpl_lightcuts:1000000 \
+    --method volpath --method vrl:10000 --method vrl_lightcuts:100000,cut=bound \
+    --method vpl_lightcuts:1000000,cut=bound --method vrl_lightcuts:1000 --method vrl_lightcuts:10000 \
+    --method vpl_lightcuts:10000 \
     -o "$dir/images" --report "$dir/report")
   sweep=$("$HAZE" compare "$scene" -D res="$RES" --reference "$dir/reference.exr" --time "$SWEEP_BUDGET" \
     --method vrl:1000 --method vrl:10000 --method vrl:100000 \
+    --method vrl_lightcuts:1000,cut=bound --method vrl_lightcuts:10000,cut=bound \
+    --method vrl_lightcuts:100000,cut=bound \
     --method vrl_lightcuts:1000 --method vrl_lightcuts:10000 --method vrl_lightcuts:100000 \
     -o "$dir/sweep" --lights-plot "docs/results/$s-rmse-vs-lights.svg")
   {

@@ -138,6 +138,10 @@ pub struct CompareArgs {
     /// Seed of every method.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Camera samples per pixel of every method's passes (many-light methods share a pass's
+    /// lights between them); default: haze render's.
+    #[arg(long)]
+    pub spp_per_pass: Option<String>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -163,6 +167,7 @@ pub fn run_method(
     reference: &[f32],
     budget: Duration,
     seed: u64,
+    spp_per_pass: u32,
 ) -> Result<MethodResult> {
     let start = Instant::now();
     let method = Method::build(scene, spec.kind, &spec.options, seed)?;
@@ -178,10 +183,10 @@ pub fn run_method(
         }
         let chunk = next_chunk(passes);
         let settings = RenderSettings {
-            spp: chunk,
+            spp: chunk * spp_per_pass,
             time_limit: (passes > 0).then_some(remaining),
             seed,
-            spp_per_pass: 1,
+            spp_per_pass,
             components: false,
             first_pass: passes,
         };
@@ -279,10 +284,18 @@ pub fn run(args: CompareArgs) -> Result<()> {
         );
     }
     let budget = crate::limits::seconds("--time", args.time)?;
+    let spp_per_pass = match &args.spp_per_pass {
+        Some(text) => {
+            let spec = options::find("spp_per_pass").expect("the table has spp_per_pass");
+            let o = options::resolve(MethodKind::VolPath, &[(spec.name, text)], Spelling::Flag)?;
+            o.spp_per_pass
+        }
+        None => options::Options::defaults().spp_per_pass,
+    };
     let mut results = Vec::new();
     for spec in &args.methods {
         eprintln!("{spec}: rendering for {:.1} s", args.time);
-        let r = run_method(&scene, spec, &reference.data, budget, args.seed)
+        let r = run_method(&scene, spec, &reference.data, budget, args.seed, spp_per_pass)
             .with_context(|| format!("{}: method {spec}", args.scene.display()))?;
         let img = RgbImage::new(w, h, r.image.clone());
         let exr = args.out_dir.join(format!("{}.exr", spec.file_stem()));
