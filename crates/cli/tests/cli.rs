@@ -199,6 +199,8 @@ fn cut_image_is_a_heat_map_of_the_image_size() {
                 "vrl_lightcuts",
                 "--cut",
                 cut,
+                if cut == "stochastic" { "--cut-size" } else { "--max-cut" },
+                if cut == "stochastic" { "4" } else { "1000" },
                 "--vrls",
                 "3000",
                 "--cut-image",
