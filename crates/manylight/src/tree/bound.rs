@@ -36,20 +36,6 @@ pub enum BoundKind {
     Tight,
 }
 
-impl std::str::FromStr for BoundKind {
-    type Err = String;
-
-    /// The names of `--bound`: `paper`, `conservative`, `tight`.
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "paper" => Ok(BoundKind::Paper),
-            "conservative" => Ok(BoundKind::Conservative),
-            "tight" => Ok(BoundKind::Tight),
-            other => Err(format!("the bound must be 'paper', 'conservative' or 'tight', got '{other}'")),
-        }
-    }
-}
-
 /// How `Theta_max` is bounded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ThetaBound {

@@ -44,19 +44,6 @@ pub enum Builder {
     MedianSplit,
 }
 
-impl std::str::FromStr for Builder {
-    type Err = String;
-
-    /// The names of `--builder`: `agglomerative`, `median`.
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "agglomerative" => Ok(Builder::Agglomerative),
-            "median" => Ok(Builder::MedianSplit),
-            other => Err(format!("the builder must be 'agglomerative' or 'median', got '{other}'")),
-        }
-    }
-}
-
 /// How a camera segment's cut is chosen (`--cut`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CutStrategy {
@@ -66,19 +53,6 @@ pub enum CutStrategy {
     /// The paper's deterministic cut: refine by upper bounds until `epsilon` or `max_cut`
     /// (`tree::cut`), each node estimated by its representative.
     Bound,
-}
-
-impl std::str::FromStr for CutStrategy {
-    type Err = String;
-
-    /// The names of `--cut`: `stochastic`, `bound`.
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "stochastic" => Ok(CutStrategy::Stochastic),
-            "bound" => Ok(CutStrategy::Bound),
-            other => Err(format!("the cut must be 'stochastic' or 'bound', got '{other}'")),
-        }
-    }
 }
 
 #[derive(Clone, Copy, Debug)]
