@@ -132,7 +132,7 @@ def test_new_options_reach_the_render(small_box):
     scene = haze.load_scene(small_box)
     base = dict(spp=1, seed=3, light_paths=40)
     a = scene.render("vrl_lightcuts", **base)
-    assert np.array_equal(a, scene.render("vrl_lightcuts", cut_size=8, **base))
+    assert np.array_equal(a, scene.render("vrl_lightcuts", cut_size=1, **base))
     assert not np.array_equal(a, scene.render("vrl_lightcuts", cut_size=2, **base))
     b = scene.render("vrl_lightcuts", cut="bound", **base)
     assert not np.array_equal(a, b)
