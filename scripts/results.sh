@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md: for each benchmark scene (scenes/bench-*.xml), a long volpath
-# reference, an equal-time `haze compare` of volpath, vrl:10000, vrl_lightcuts:100000 and
-# vpl_lightcuts:1000000 (the paper's table), and RMSE vs number of lights for vrl and
-# vrl_lightcuts. HTML reports go to target/results/<scene>/report/index.html (OUT=...; not committed).
+# reference, an equal-time `haze compare` of volpath, vrl:10000, the paper's deterministic cut
+# (vrl_lightcuts:100000,cut=bound and vpl_lightcuts:1000000,cut=bound: the paper's table) and the
+# stochastic cut (vrl_lightcuts and vpl_lightcuts, the default --cut stochastic), and RMSE vs
+# number of lights for vrl and both cuts. HTML reports go to target/results/<scene>/report/index.html (OUT=...; not committed).
 #
 # Budgets come from the environment, so a quick check of the script is possible:
 #   REF_TIME=600 BUDGET=60 RES=128 scripts/results.sh      # the documented run (about 1.5 h)
@@ -36,7 +37,7 @@ mkdir -p docs/results
   echo "Metrics (crates/render/src/metrics.rs): RMSE over pixels and channels; SMAPE ="
   echo "100 mean |a-r|/(|a|+|r|), entries where both are 0 skipped (range 0-100); relMSE ="
   echo "mean (a-r)^2/(r^2+0.01). The paper's numbers (Vibert et al. 2019, seed slides) are in"
-  echo "\`../shared/notes/vrl-lightcuts.md\` §6: RMSE 2.70 (VRL lightcuts 100k) vs 5.46 (VRLs 10k) vs 9.01"
+  echo "[theory.md](theory.md#10-the-papers-reported-numbers) §10: RMSE 2.70 (VRL lightcuts 100k) vs 5.46 (VRLs 10k) vs 9.01"
   echo "(VPL lightcuts 1M); its scenes and radiance scale differ, so only ratios compare."
 } > "$DOC.tmp"
 
@@ -50,10 +51,14 @@ for s in $SCENES; do
     "$HAZE" reference "$scene" -D res="$RES" --time "$REF_TIME" -o "$dir/reference.exr" >&2
   fi
   table=$("$HAZE" compare "$scene" -D res="$RES" --reference "$dir/reference.exr" --time "$BUDGET" \
-    --method volpath --method vrl:10000 --method vrl_lightcuts:100000 --method vpl_lightcuts:1000000 \
+    --method volpath --method vrl:10000 --method vrl_lightcuts:100000,cut=bound \
+    --method vpl_lightcuts:1000000,cut=bound --method vrl_lightcuts:1000 --method vrl_lightcuts:10000 \
+    --method vpl_lightcuts:10000 \
     -o "$dir/images" --report "$dir/report")
   sweep=$("$HAZE" compare "$scene" -D res="$RES" --reference "$dir/reference.exr" --time "$SWEEP_BUDGET" \
     --method vrl:1000 --method vrl:10000 --method vrl:100000 \
+    --method vrl_lightcuts:1000,cut=bound --method vrl_lightcuts:10000,cut=bound \
+    --method vrl_lightcuts:100000,cut=bound \
     --method vrl_lightcuts:1000 --method vrl_lightcuts:10000 --method vrl_lightcuts:100000 \
     -o "$dir/sweep" --lights-plot "docs/results/$s-rmse-vs-lights.svg")
   {

@@ -3,7 +3,8 @@
 #   1. the Rust workspace (cargo test --workspace);
 #   2. the Python package: a venv in .venv with the pinned tools (python/requirements-dev.txt),
 #      the extension built into it by maturin, then pytest python/tests (Ray tests included).
-# Needs: a Rust toolchain and python3 (3.9+, with venv). The tests read ../shared/.
+# Needs: a Rust toolchain and python3 (3.9+, with venv). The data is in tests/data/; the peer
+# tests read $HAZE_PEERS_DIR or ../shared/peers and are skipped, with one line, without it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

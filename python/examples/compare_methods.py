@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 import haze  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve()
-DEFAULT_SCENE = HERE.parents[3] / "shared" / "validation" / "scenes" / "hg-box.xml"
+DEFAULT_SCENE = HERE.parents[2] / "tests" / "data" / "validation" / "scenes" / "hg-box.xml"
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("scene", nargs="?", default=str(DEFAULT_SCENE))

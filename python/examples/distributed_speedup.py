@@ -15,7 +15,7 @@ import sys
 import time
 
 HERE = pathlib.Path(__file__).resolve()
-DEFAULT_SCENE = HERE.parents[3] / "shared" / "validation" / "scenes" / "hg-box.xml"
+DEFAULT_SCENE = HERE.parents[2] / "tests" / "data" / "validation" / "scenes" / "hg-box.xml"
 
 
 def one(scene, workers, passes, vrls):
@@ -25,9 +25,9 @@ def one(scene, workers, passes, vrls):
 
     ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
     # Warm up: start the workers and load the scene in them.
-    distributed.render(scene, passes=workers, passes_per_task=1, vrls=vrls, progress=False)
+    distributed.render(scene, spp=workers, passes_per_task=1, vrls=vrls, progress=False)
     start = time.monotonic()
-    distributed.render(scene, passes=passes, passes_per_task=1, vrls=vrls, progress=False)
+    distributed.render(scene, spp=passes, passes_per_task=1, vrls=vrls, progress=False)
     secs = time.monotonic() - start
     print(f"{workers} {secs:.3f} {os.getloadavg()[0]:.2f}")
 

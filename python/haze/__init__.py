@@ -22,6 +22,7 @@ from ._haze import METHOD_NAMES, Film, SceneError, merge_films, pass_blocks, rea
 __all__ = [
     "COMPONENTS",
     "METHOD_NAMES",
+    "OPTIONS",
     "Film",
     "Lights",
     "Scene",
@@ -91,54 +92,132 @@ class Scene:
     def render_film(
         self,
         integrator: str | None = "vrl_lightcuts",
+        *,
         spp: int | None = None,
         time: float | None = None,
         seed: int = 0,
-        vrls: int | None = None,
-        epsilon: float | None = None,
-        components: bool = False,
-        light_paths: int | None = None,
         spp_per_pass: int = 1,
+        components: bool = False,
+        vrls: int | None = None,
+        light_paths: int | None = None,
+        vpl_clamp: float | None = None,
+        cut: str | None = None,
+        cut_size: int | None = None,
+        epsilon: float | None = None,
+        max_cut: int | None = None,
+        bound: str | None = None,
+        builder: str | None = None,
     ) -> Film:
         """Like :meth:`render`, but returns the :class:`Film` (means, variances, raw sums)."""
-        return self._inner.render(
-            integrator=integrator,
-            spp=spp,
-            time=time,
-            seed=seed,
-            vrls=vrls,
-            light_paths=light_paths,
-            epsilon=epsilon,
-            components=components,
-            spp_per_pass=spp_per_pass,
-        )
+        return self._inner.render(integrator, **_given(locals()))
 
     def render(
         self,
         integrator: str | None = "vrl_lightcuts",
+        *,
         spp: int | None = None,
         time: float | None = None,
         seed: int = 0,
-        vrls: int | None = None,
-        epsilon: float | None = None,
-        components: bool = False,
-        light_paths: int | None = None,
         spp_per_pass: int = 1,
+        components: bool = False,
+        vrls: int | None = None,
+        light_paths: int | None = None,
+        vpl_clamp: float | None = None,
+        cut: str | None = None,
+        cut_size: int | None = None,
+        epsilon: float | None = None,
+        max_cut: int | None = None,
+        bound: str | None = None,
+        builder: str | None = None,
     ):
-        """Renders the scene as ``haze render`` does and returns the image.
+        # The docstring is made from the engine's table below (_RENDER_DOC).
+        film = self._inner.render(integrator, **_given(locals()))
+        return _images(film, components)
+
+    def render_passes(
+        self,
+        integrator: str | None = "vrl_lightcuts",
+        first: int = 0,
+        count: int = 1,
+        *,
+        seed: int = 0,
+        spp_per_pass: int = 1,
+        components: bool = False,
+        vrls: int | None = None,
+        light_paths: int | None = None,
+        vpl_clamp: float | None = None,
+        cut: str | None = None,
+        cut_size: int | None = None,
+        epsilon: float | None = None,
+        max_cut: int | None = None,
+        bound: str | None = None,
+        builder: str | None = None,
+    ) -> Film:
+        """Renders the passes ``first .. first + count`` and returns their :class:`Film`.
+
+        Each pass is keyed by ``(seed, pass index)`` (its camera samples, its light paths, its
+        light tree), and the passes are summed over a fixed binary tree, so this film equals,
+        bit for bit, :func:`merge_films` of any split of the range into :func:`pass_blocks`
+        rendered elsewhere (this is what :func:`haze.distributed.render` does). The options are
+        those of :meth:`render` but ``spp`` and ``time`` (the passes are the budget).
+        """
+        return self._inner.render_passes(integrator, first, count, **_given(locals()))
+
+    def cut_sizes(
+        self,
+        integrator: str | None = "vrl_lightcuts",
+        *,
+        seed: int = 0,
+        vrls: int | None = None,
+        light_paths: int | None = None,
+        cut: str | None = None,
+        cut_size: int | None = None,
+        epsilon: float | None = None,
+        max_cut: int | None = None,
+        bound: str | None = None,
+        builder: str | None = None,
+    ) -> np.ndarray:
+        """Per pixel, a float32 array of shape (H, W), what ``haze render --cut-image`` draws:
+        the mean cut size (``cut="bound"``) or the largest cut node's share of the stochastic
+        cut's importance (the default cut), from one extra 1-spp pass (pass 0 with ``seed``, so
+        the lights and cuts of the image's first pass); 0 where the camera path meets no
+        medium. Lightcut methods only; the options are those of :meth:`render` without the
+        sample budget."""
+        return self._inner.cut_sizes(integrator, **_given(locals()))
+
+    def __repr__(self) -> str:
+        return repr(self._inner)
+
+
+#: The engine's options (name, default, help, the methods each applies to): one dict per option,
+#: as ``haze render --help`` and ``haze compare`` know them.
+OPTIONS = tuple(_haze.method_options())
+_OPTION_NAMES = frozenset(o["name"] for o in OPTIONS)
+
+
+def _given(values: dict) -> dict:
+    """The engine options among a function's ``locals()`` that were given (not None)."""
+    return {k: v for k, v in values.items() if k in _OPTION_NAMES and v is not None}
+
+
+def _options_doc(indent: str, skip: tuple[str, ...] = ()) -> str:
+    """The ``Args:`` entries of the engine's options, from its table."""
+    lines = []
+    for o in OPTIONS:
+        if o["name"] not in skip:
+            lines.append(f"{indent}{o['name']}: {o['help']}")
+    return "\n".join(lines)
+
+
+_RENDER_DOC = """Renders the scene as ``haze render`` does and returns the image.
 
         Args:
-            integrator: ``volpath``, ``vrl``, ``vpl``, ``vrl_lightcuts`` or ``vpl_lightcuts``;
-                ``None`` for the scene's own ``<integrator>``.
-            spp: samples per pixel (default: the scene's ``sample_count``).
-            time: render for this many seconds instead (not with ``spp``).
-            seed: the same seed gives a bit-identical image, whatever the thread count.
-            vrls: many-light methods: about this many virtual lights per pass (default 10000).
-            epsilon: lightcuts: the cut's error bound relative to its estimate (default 0.02).
-            components: also return the components (see :data:`COMPONENTS`).
-            light_paths: many-light methods: exactly this many light paths per pass (instead of
-                ``vrls``).
-            spp_per_pass: samples per pixel in one progressive pass.
+            integrator: one of :data:`METHOD_NAMES`; ``None`` for the scene's own
+                ``<integrator>``.
+{options}
+
+        An option left at ``None`` takes the default above; an option given for a method it
+        does not apply to is a ``ValueError`` naming both (as on the command line).
 
         Returns:
             A float32 array of shape (H, W, 3) (linear RGB), or with ``components=True`` a dict
@@ -148,44 +227,7 @@ class Scene:
             ValueError: a bad argument or an integrator that cannot render this scene.
             KeyboardInterrupt: Ctrl-C (the render stops after the current pass).
         """
-        film = self.render_film(
-            integrator, spp, time, seed, vrls, epsilon, components, light_paths, spp_per_pass
-        )
-        return _images(film, components)
-
-    def render_passes(
-        self,
-        integrator: str | None = "vrl_lightcuts",
-        first: int = 0,
-        count: int = 1,
-        spp_per_pass: int = 1,
-        seed: int = 0,
-        vrls: int | None = None,
-        epsilon: float | None = None,
-        components: bool = False,
-        light_paths: int | None = None,
-    ) -> Film:
-        """Renders the passes ``first .. first + count`` and returns their :class:`Film`.
-
-        Each pass is keyed by ``(seed, pass index)`` (its camera samples, its light paths, its
-        light tree), and the passes are summed over a fixed binary tree, so this film equals,
-        bit for bit, :func:`merge_films` of any split of the range into :func:`pass_blocks`
-        rendered elsewhere (this is what :func:`haze.distributed.render` does).
-        """
-        return self._inner.render_passes(
-            integrator=integrator,
-            first=first,
-            count=count,
-            spp_per_pass=spp_per_pass,
-            seed=seed,
-            vrls=vrls,
-            light_paths=light_paths,
-            epsilon=epsilon,
-            components=components,
-        )
-
-    def __repr__(self) -> str:
-        return repr(self._inner)
+Scene.render.__doc__ = _RENDER_DOC.format(options=_options_doc(" " * 12))
 
 
 def _images(film: Film, components: bool):

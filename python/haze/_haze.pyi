@@ -6,7 +6,7 @@ from typing import Any, Optional, Sequence
 import numpy as np
 import numpy.typing as npt
 
-METHOD_NAMES: str
+METHOD_NAMES: tuple[str, ...]
 
 class SceneError(Exception):
     """A scene file could not be loaded; the message names the file, line, column and element."""
@@ -52,31 +52,15 @@ class Scene:
     def spp(self) -> int: ...
     @property
     def integrator(self) -> str: ...
-    def render(
-        self,
-        integrator: Optional[str] = None,
-        spp: Optional[int] = None,
-        time: Optional[float] = None,
-        seed: int = 0,
-        vrls: Optional[int] = None,
-        light_paths: Optional[int] = None,
-        epsilon: Optional[float] = None,
-        components: bool = False,
-        spp_per_pass: int = 1,
-    ) -> Film: ...
-    def render_passes(
-        self,
-        integrator: Optional[str] = None,
-        first: int = 0,
-        count: int = 1,
-        spp_per_pass: int = 1,
-        seed: int = 0,
-        vrls: Optional[int] = None,
-        light_paths: Optional[int] = None,
-        epsilon: Optional[float] = None,
-        components: bool = False,
-    ) -> Film: ...
+    def render(self, integrator: Optional[str] = None, **options: Any) -> Film:
+        """Renders with the engine's options (method_options()) given by name."""
+    def render_passes(self, integrator: Optional[str] = None, first: int = 0, count: int = 1, **options: Any) -> Film: ...
+    def cut_sizes(self, integrator: Optional[str] = None, **options: Any) -> npt.NDArray[np.float32]: ...
+    def check_options(self, integrator: Optional[str] = None, **options: Any) -> str:
+        """Checks the options for the method as render would; returns the method's name."""
 
+def method_options() -> list[dict[str, Any]]:
+    """The engine's table of options, one dict per option."""
 def load_scene(path: str | os.PathLike[str], defines: Sequence[tuple[str, str]] = ...) -> Scene: ...
 def pass_blocks(first: int, count: int, max_block: int) -> list[tuple[int, int]]: ...
 def merge_films(first: int, count: int, blocks: Sequence[tuple[int, int, Film]]) -> Film: ...

@@ -7,8 +7,9 @@ import re
 import pytest
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-SHARED = REPO.parent / "shared"
-HG_BOX = SHARED / "validation" / "scenes" / "hg-box.xml"
+# The validation data shipped in the repository (tests/data/validation/README.md).
+VALIDATION = REPO / "tests" / "data" / "validation"
+HG_BOX = VALIDATION / "scenes" / "hg-box.xml"
 
 
 def small_scene_text(width: int, height: int) -> str:
@@ -21,7 +22,7 @@ def small_scene_text(width: int, height: int) -> str:
 @pytest.fixture(scope="session")
 def hg_box() -> pathlib.Path:
     if not HG_BOX.exists():
-        pytest.fail(f"{HG_BOX} is missing: the tests read the shared validation data from ../shared")
+        pytest.fail(f"{HG_BOX} is missing: the tests read the validation data in tests/data/validation")
     return HG_BOX
 
 

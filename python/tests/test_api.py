@@ -77,7 +77,7 @@ def test_bad_arguments_are_value_errors(small_box):
     scene = haze.load_scene(small_box)
     with pytest.raises(ValueError, match="unknown integrator 'nope'"):
         scene.render("nope", spp=1)
-    with pytest.raises(ValueError, match="spp must be at least 1"):
+    with pytest.raises(ValueError, match="spp must be a positive integer"):
         scene.render("volpath", spp=0)
     with pytest.raises(ValueError, match="not both"):
         scene.render("volpath", spp=1, time=1.0)

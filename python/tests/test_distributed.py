@@ -33,16 +33,16 @@ def test_distributed_equals_single_process_bit_for_bit(cluster, small_box):
     single = haze.load_scene(small_box).render_passes(first=0, count=passes, seed=5, **OPTIONS)
     for per_task in (1, 4):
         film = distributed.render(
-            small_box, passes=passes, seed=5, passes_per_task=per_task, progress=False, return_film=True, **OPTIONS
+            small_box, spp=passes, seed=5, passes_per_task=per_task, progress=False, return_film=True, **OPTIONS
         )
         assert film.samples == passes
         assert np.array_equal(film.sums(), single.sums()), f"blocks of {per_task} passes"
-    image = distributed.render(small_box, passes=passes, seed=5, passes_per_task=2, progress=False, **OPTIONS)
+    image = distributed.render(small_box, spp=passes, seed=5, passes_per_task=2, progress=False, **OPTIONS)
     assert image.dtype == np.float32 and np.array_equal(image, single.mean())
 
 
 def test_components_travel_too(cluster, small_box):
-    out = distributed.render(small_box, passes=2, seed=1, components=True, progress=False, **OPTIONS)
+    out = distributed.render(small_box, spp=2, seed=1, components=True, progress=False, **OPTIONS)
     single = haze.load_scene(small_box).render_passes(first=0, count=2, seed=1, components=True, **OPTIONS)
     assert set(out) == {"image", *haze.COMPONENTS}
     for c in haze.COMPONENTS:
@@ -56,7 +56,7 @@ def test_other_seeds_agree_by_a_per_pixel_z_test(cluster, small_box):
     from statistics import NormalDist
 
     passes = 32
-    a = distributed.render(small_box, passes=passes, seed=1, progress=False, return_film=True, **OPTIONS)
+    a = distributed.render(small_box, spp=passes, seed=1, progress=False, return_film=True, **OPTIONS)
     b = haze.load_scene(small_box).render_passes(first=0, count=passes, seed=2, **OPTIONS)
     var = a.variance_of_mean().astype(np.float64) + b.variance_of_mean()
     diff = a.mean().astype(np.float64) - b.mean()
@@ -86,7 +86,7 @@ def test_a_killed_worker_is_retried_and_the_image_is_exact(cluster, small_box):
 
     def run():
         result["film"] = distributed.render(
-            small_box, passes=passes, seed=9, passes_per_task=per_task, progress=False, return_film=True, **OPTIONS
+            small_box, spp=passes, seed=9, passes_per_task=per_task, progress=False, return_film=True, **OPTIONS
         )
 
     driver = threading.Thread(target=run)
@@ -104,3 +104,40 @@ def test_a_killed_worker_is_retried_and_the_image_is_exact(cluster, small_box):
     assert len([s for s in started if s.endswith(f"-{block}")]) >= 2, f"block {block} was not retried: {started}"
     single = haze.load_scene(small_box).render_passes(first=0, count=passes, seed=9, **OPTIONS)
     assert np.array_equal(result["film"].sums(), single.sums())
+
+
+def test_a_time_budget_renders_a_prefix_of_passes_exactly(cluster, small_box):
+    """``time=``: blocks are handed out in order until the deadline; the film is that of the
+    passes rendered, bit for bit the single-process render of as many passes."""
+    start = time.monotonic()
+    film = distributed.render(small_box, time=1.5, seed=4, progress=False, return_film=True, **OPTIONS)
+    assert time.monotonic() - start < 60
+    passes = film.samples
+    assert passes >= 2, f"{passes} passes in 1.5 s"
+    single = haze.load_scene(small_box).render_passes(first=0, count=passes, seed=4, **OPTIONS)
+    assert np.array_equal(film.sums(), single.sums()), f"{passes} passes"
+    # Blocks of 4 passes: the prefix is a whole number of blocks, merged over the same tree.
+    film = distributed.render(
+        small_box, time=1.0, seed=4, passes_per_task=4, progress=False, return_film=True, **OPTIONS
+    )
+    assert film.samples % 4 == 0 and film.samples >= 4
+    single = haze.load_scene(small_box).render_passes(first=0, count=film.samples, seed=4, **OPTIONS)
+    assert np.array_equal(film.sums(), single.sums())
+
+
+def test_options_are_checked_on_the_driver(cluster, small_box):
+    with pytest.raises(ValueError, match="max_cut does not apply to vrl"):
+        distributed.render(small_box, "vrl", spp=1, max_cut=5, progress=False)
+    with pytest.raises(ValueError, match="give either spp or time"):
+        distributed.render(small_box, spp=1, time=1.0, progress=False, **OPTIONS)
+    with pytest.raises(ValueError, match="multiple of spp_per_pass"):
+        distributed.render(small_box, "volpath", spp=3, spp_per_pass=2, progress=False)
+
+
+def test_the_command_line_takes_the_engines_options(cluster, small_box, tmp_path):
+    out = tmp_path / "d.exr"
+    args = [str(small_box), "-o", str(out), "--spp", "2", "--vrls", "300", "--cut", "bound", "--max-cut", "50"]
+    assert distributed.main(args + ["--seed", "3", "-q"]) == 0
+    single = haze.load_scene(small_box).render_passes(first=0, count=2, seed=3, vrls=300, cut="bound", max_cut=50)
+    assert np.array_equal(haze.read_exr(out), single.mean())
+    assert distributed.main([str(small_box), "-o", str(out), "--integrator", "vrl", "--max-cut", "5", "-q"]) == 2

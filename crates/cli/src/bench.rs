@@ -3,6 +3,7 @@
 use crate::render_cmd::{load_scene, set_threads};
 use anyhow::Result;
 use clap::Args;
+use haze_engine::options::{self, MethodKind, Options, Spelling};
 use haze_manylight::integrators::{LightBudget, ManyLightSettings, VrlIntegrator};
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
@@ -14,29 +15,32 @@ use std::time::Instant;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scenes to measure (default: the shared validation scenes).
+    /// Scenes to measure (default: the validation scenes shipped with haze,
+    /// `tests/data/validation/scenes`, looked for in the current directory and beside the
+    /// executable).
     pub scenes: Vec<PathBuf>,
-    /// Samples per pixel per scene.
-    #[arg(long, default_value_t = 64)]
-    pub spp: u32,
+    /// volpath, vrl: samples per pixel per scene (default 64).
+    #[arg(long)]
+    pub spp: Option<String>,
     #[arg(long)]
     pub threads: Option<usize>,
     /// What to measure: `volpath` (samples/s against Mitsuba 3) or `vrl` (VRL evaluations/s).
     #[arg(long, default_value = "volpath")]
     pub integrator: String,
-    /// vrl: VRLs per pass.
-    #[arg(long, default_value_t = 10_000)]
-    pub vrls: u64,
+    /// vrl: VRLs per pass (default: haze render's).
+    #[arg(long)]
+    pub vrls: Option<String>,
     /// lightcuts: measure cut sizes up to this many VRLs (larger counts: build time only).
     #[arg(long, default_value_t = 1_000_000)]
     pub max_cut_vrls: u64,
     /// lightcuts: most nodes per cut for the cut-size column (a large value shows the sizes the
-    /// error criterion alone asks for).
-    #[arg(long, default_value_t = 1000)]
-    pub max_cut: u32,
-    /// lightcuts: cluster bound for the cut-size column: paper, conservative or tight.
-    #[arg(long, default_value = "paper")]
-    pub bound: String,
+    /// error criterion alone asks for; default: haze render's).
+    #[arg(long)]
+    pub max_cut: Option<String>,
+    /// lightcuts: cluster bound for the cut-size column: paper, conservative or tight (default:
+    /// haze render's).
+    #[arg(long)]
+    pub bound: Option<String>,
     /// Override a scene `<default>` parameter: -D name=value (e.g. -D res=48 for cheaper cuts).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
@@ -46,51 +50,112 @@ pub struct BenchArgs {
     /// lightcuts: PLOC search radius of the agglomerative builder (default: the builder's).
     #[arg(long)]
     pub ploc_radius: Option<usize>,
+    /// stochastic: the largest VRL count of the scaling table (10k, 100k, ... up to this).
+    #[arg(long, default_value_t = 10_000_000)]
+    pub max_vrls: u64,
+    /// stochastic: nodes per cut (default: haze render's).
+    #[arg(long)]
+    pub cut_size: Option<String>,
 }
 
 /// Mitsuba 3.9.1 `llvm_ad_rgb` volpath on the validation scenes on the same 2-core machine
-/// (`../shared/validation/README.md`): 128x96 pixels at 16384 spp in this many seconds.
+/// (`tests/data/validation/README.md`): 128x96 pixels at 16384 spp in this many seconds.
 const MITSUBA_SECONDS: &[(&str, f64)] = &[("hg-box.xml", 31.0), ("foggy-room.xml", 72.0)];
 
 pub fn run(args: BenchArgs) -> Result<()> {
     set_threads(args.threads)?;
     let scenes = if args.scenes.is_empty() {
-        let base = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/validation/scenes");
-        vec![base.join("hg-box.xml"), base.join("foggy-room.xml")]
+        vec![
+            shipped("tests/data/validation/scenes/hg-box.xml")?,
+            shipped("tests/data/validation/scenes/foggy-room.xml")?,
+        ]
     } else {
         args.scenes.clone()
     };
-    match args.integrator.as_str() {
-        "volpath" => bench_volpath(&args, &scenes),
-        "vrl" => bench_vrl(&args, &scenes),
-        "lightcuts" => {
-            bench_lightcuts(&args, &scenes)?;
+    if args.integrator == "stochastic" {
+        return bench_stochastic(&args, &scenes);
+    }
+    if args.cut_size.is_some() {
+        anyhow::bail!("--cut-size applies only to haze bench --integrator stochastic");
+    }
+    // The options go through the engine's table, as haze render's do.
+    let kind = match args.integrator.as_str() {
+        "volpath" => MethodKind::VolPath,
+        "vrl" => MethodKind::Vrl,
+        "lightcuts" => MethodKind::VrlLightcuts,
+        other => anyhow::bail!("haze bench measures volpath, vrl, lightcuts or stochastic, not '{other}'"),
+    };
+    if kind.is_lightcuts() {
+        // Its frames are 1 spp and its light counts 10k, 100k and 1M.
+        for (flag, given) in [("--spp", &args.spp), ("--vrls", &args.vrls)] {
+            if given.is_some() {
+                anyhow::bail!("{flag} does not apply to haze bench --integrator lightcuts (it measures 1-spp frames with 10k, 100k and 1M VRLs)");
+            }
+        }
+    }
+    // The lightcuts tables measure the paper's cut.
+    let mut given = if kind.is_lightcuts() { vec![("cut", "bound")] } else { Vec::new() };
+    let spp = args.spp.as_deref().unwrap_or(if kind.is_lightcuts() { "1" } else { "64" });
+    for (name, value) in [
+        ("spp", Some(spp)),
+        ("vrls", args.vrls.as_deref()),
+        ("max_cut", args.max_cut.as_deref()),
+        ("bound", args.bound.as_deref()),
+    ] {
+        if let Some(v) = value {
+            given.push((name, v));
+        }
+    }
+    let options = options::resolve(kind, &given, Spelling::Flag)?;
+    match kind {
+        MethodKind::VolPath => bench_volpath(&options, &scenes),
+        MethodKind::Vrl => bench_vrl(&options, &scenes),
+        _ => {
+            bench_lightcuts(&args, &options, &scenes)?;
             if args.scenes.is_empty() && !args.build_only {
                 cut_growth()?;
             }
             Ok(())
         }
-        other => anyhow::bail!("haze bench measures volpath, vrl or lightcuts, not '{other}'"),
     }
+}
+
+/// A file shipped with haze (`rel` is its path in the repository), found in the current
+/// directory, beside the executable, or in the directories above it (`target/release/haze` in
+/// a clone), or in `share/haze` under one of those (an installed binary); never a path compiled
+/// in from the source tree.
+fn shipped(rel: &str) -> Result<PathBuf> {
+    let mut roots = vec![PathBuf::from(".")];
+    if let Ok(exe) = std::env::current_exe() {
+        for dir in exe.ancestors().skip(1).take(4) {
+            roots.push(dir.to_path_buf());
+            roots.push(dir.join("share/haze"));
+        }
+    }
+    if let Some(found) = roots.iter().map(|r| r.join(rel)).find(|p| p.is_file()) {
+        return Ok(found);
+    }
+    let looked: Vec<String> = roots.iter().map(|r| r.display().to_string()).collect();
+    anyhow::bail!(
+        "haze bench: the default scene {rel} was not found (looked in {}); run it from a clone of \
+         the haze repository or give the scene files as arguments",
+        looked.join(", ")
+    )
 }
 
 /// Light-tree build times (3-step agglomerative vs median split, 1 and all threads, for 10k,
 /// 100k and 1M VRLs traced in the scene), mean cut size against the number of VRLs, and the
 /// frame time of `vrl_lightcuts` with 100k VRLs against `vrl` with 10k VRLs at 1 spp.
-fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
-    use haze_manylight::integrators::{Builder, LightKind, LightcutSettings, LightcutsIntegrator};
+fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> Result<()> {
+    use haze_manylight::integrators::{Builder, CutStrategy, LightcutSettings, LightcutsIntegrator, Vrls};
     use haze_manylight::lighttrace::{paths_for_vrl_count, trace_light_paths};
-    use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::build::{build_agglomerative, build_median_split, BuildSettings};
-    use haze_manylight::tree::cut::CutSettings;
     use haze_manylight::tree::lights::LightSummary;
     use haze_manylight::vrl::{Segment, Vrl};
-    let bound = match args.bound.as_str() {
-        "paper" => BoundKind::Paper,
-        "conservative" => BoundKind::Conservative,
-        "tight" => BoundKind::Tight,
-        other => anyhow::bail!("--bound must be 'paper', 'conservative' or 'tight', got '{other}'"),
-    };
+    let bound = options.method.lightcuts.bound;
+    let cut_settings = options.method.lightcuts.cut;
+    let max_cut = cut_settings.max_cut;
+    let bound_name = options::find("bound").and_then(|b| b.value_in(options)).unwrap_or_default();
     for path in scenes {
         let scene = load_scene(path, &args.define)?;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -100,13 +165,14 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             BuildSettings { radius: args.ploc_radius.unwrap_or(defaults.radius), ..defaults };
         let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
         println!(
-            "\n### {file} ({}x{}; PLOC radius {}, groups of {}; cuts: bound {}, epsilon 0.02, max cut {}; load average {})\n",
+            "\n### {file} ({}x{}; PLOC radius {}, groups of {}; cuts: bound {}, epsilon {}, max cut {}; load average {})\n",
             scene.camera.width,
             scene.camera.height,
             build_settings.radius,
             build_settings.group_size,
-            args.bound,
-            args.max_cut,
+            bound_name,
+            cut_settings.epsilon,
+            max_cut,
             load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
         );
         println!("| VRLs | builder | threads | build s | CPU s | ns per N log2 N | tree cost | mean cut (1 spp) | segments at max-cut | cut s |");
@@ -151,12 +217,13 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
                             },
                             build: build_settings,
                             bound,
-                            cut: CutSettings { max_cut: args.max_cut, ..Default::default() },
+                            cut: cut_settings,
+                            strategy: CutStrategy::Bound,
                             ..Default::default()
                         };
                         let ml =
                             ManyLightSettings { budget: LightBudget::Paths(paths), trace: trace.clone() };
-                        let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+                        let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, 0)?;
                         let settings = RenderSettings { spp: 1, ..Default::default() };
                         let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
                         let (mean, _, hit) = integ.cut_statistics();
@@ -185,8 +252,7 @@ fn bench_lightcuts(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         }
         // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
         let ml = |vrls| ManyLightSettings { budget: LightBudget::Vrls(vrls), trace: trace.clone() };
-        let lc =
-            LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(100_000), LightcutSettings::default(), 0)?;
+        let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(100_000), LightcutSettings::default(), 0)?;
         let lc_secs = frame_seconds(&scene, &lc);
         let vrl_secs = frame_seconds(&scene, &VrlIntegrator::new(&scene, ml(10_000), 0)?);
         println!(
@@ -210,10 +276,10 @@ fn tree_cost(tree: &haze_manylight::tree::LightTree) -> f64 {
 /// tight bound: the issue's "must grow sub-linearly". On the validation scenes every segment
 /// stops at the default cap of 1000, which says nothing about growth.
 fn cut_growth() -> Result<()> {
-    use haze_manylight::integrators::{LightKind, LightcutSettings, LightcutsIntegrator};
+    use haze_manylight::integrators::{CutStrategy, LightcutSettings, LightcutsIntegrator, Vrls};
     use haze_manylight::tree::bound::BoundKind;
     use haze_manylight::tree::cut::CutSettings;
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/bench-smoke-room.xml");
+    let path = shipped("scenes/bench-smoke-room.xml")?;
     let scene = load_scene(&path, &["res=32".to_string()])?;
     let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -231,9 +297,10 @@ fn cut_growth() -> Result<()> {
             let lc = LightcutSettings {
                 bound,
                 cut: CutSettings { max_cut: u32::MAX, ..Default::default() },
+                strategy: CutStrategy::Bound,
                 ..Default::default()
             };
-            let integ = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml, lc, 0)?;
+            let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, 0)?;
             let settings = RenderSettings { spp: 1, ..Default::default() };
             let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
             let (mean, _, _) = integ.cut_statistics();
@@ -259,7 +326,7 @@ fn process_cpu_seconds() -> Option<f64> {
 
 /// VRL evaluations per second: one evaluation is one camera segment x one VRL, with its
 /// visibility test. Light tracing time is reported separately.
-fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+fn bench_vrl(options: &Options, scenes: &[PathBuf]) -> Result<()> {
     println!(
         "| scene | pixels | spp | VRLs/pass | light tracing s | total s | evaluations | M evaluations/s |"
     );
@@ -267,14 +334,14 @@ fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     for path in scenes {
         let scene = load_scene(path, &[])?;
         let ml = ManyLightSettings {
-            budget: LightBudget::Vrls(args.vrls),
+            budget: options.method.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
         let integrator = VrlIntegrator::new(&scene, ml, 0)?;
         let t0 = Instant::now();
         let _ = integrator.begin_pass(&scene, 0, 0);
         let trace_s = t0.elapsed().as_secs_f64();
-        let settings = RenderSettings { spp: args.spp, spp_per_pass: 1, ..Default::default() };
+        let settings = RenderSettings { spp: spp(options), spp_per_pass: 1, ..Default::default() };
         let out = render(&scene, &integrator, &settings, &AtomicBool::new(false), |_| {});
         let secs = out.elapsed.as_secs_f64();
         let evals = integrator.evaluations();
@@ -284,7 +351,7 @@ fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
             scene.camera.width,
             scene.camera.height,
             out.film.samples,
-            args.vrls,
+            options::find("vrls").and_then(|o| o.value_in(options)).unwrap_or_default(),
             trace_s,
             secs,
             evals,
@@ -294,12 +361,17 @@ fn bench_vrl(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
-fn bench_volpath(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+/// The `--spp` of `haze bench` (always given: it has a default of its own).
+fn spp(options: &Options) -> u32 {
+    options.spp.expect("bench passes --spp")
+}
+
+fn bench_volpath(options: &Options, scenes: &[PathBuf]) -> Result<()> {
     println!("| scene | pixels | spp | seconds | Msamples/s | Mitsuba 3 Msamples/s | ratio haze/Mitsuba |");
     println!("|---|---|---|---|---|---|---|");
     for path in scenes {
         let scene = load_scene(path, &[])?;
-        let settings = RenderSettings { spp: args.spp, spp_per_pass: 4, ..Default::default() };
+        let settings = RenderSettings { spp: spp(options), spp_per_pass: 4, ..Default::default() };
         let out = render(
             &scene,
             &VolPath::from_spec(&scene.integrator),
@@ -328,6 +400,74 @@ fn bench_volpath(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
 
 /// Seconds of one frame at 1 spp with `integ`: its per-pass light tracing and tree build included,
 /// its construction (the pilot light-tracing run) not.
+/// The stochastic cut's cost per camera segment against the number of VRLs: one pass of
+/// `--spp` samples per pixel sharing one light set, for 10k, 100k, ... `--max-vrls` VRLs and
+/// seeds 0, 1, 2; light tracing and tree build are timed apart from the gather (cuts, descents
+/// and light evaluations), whose time per camera segment should hardly grow with N.
+fn bench_stochastic(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
+    use haze_manylight::integrators::{LightcutsIntegrator, Vrls};
+    if args.vrls.is_some() || args.max_cut.is_some() || args.bound.is_some() {
+        anyhow::bail!("haze bench --integrator stochastic takes --spp, --cut-size and --max-vrls (the VRL counts are 10k, 100k, ...)");
+    }
+    let mut given = vec![("spp", args.spp.as_deref().unwrap_or("4"))];
+    if let Some(k) = args.cut_size.as_deref() {
+        given.push(("cut_size", k));
+    }
+    let options = options::resolve(MethodKind::VrlLightcuts, &given, Spelling::Flag)?;
+    let (spp, cut_size) = (options.spp.unwrap_or(4), options.method.lightcuts.stochastic.cut_size);
+    for path in scenes {
+        let scene = load_scene(path, &args.define)?;
+        let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
+        let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+        println!(
+            "\n### {file}: stochastic cut of {} nodes, {}x{} at {} spp in one pass, seeds 0-2 (load average {})\n",
+            cut_size,
+            scene.camera.width,
+            scene.camera.height,
+            spp,
+            load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+        );
+        println!("| VRLs | trace s | build s | gather s (min-max over seeds) | gather ns per segment | vs first row |");
+        println!("|---|---|---|---|---|---|");
+        let mut first = None;
+        let mut n = 10_000u64;
+        while n <= args.max_vrls {
+            let mut rows = Vec::new();
+            for seed in 0..3u64 {
+                let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+                let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, options.method.lightcuts, seed)?;
+                let settings = RenderSettings { spp, spp_per_pass: spp, seed, ..Default::default() };
+                let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
+                let (t, b) = (integ.trace_seconds(), integ.build_seconds());
+                let gather = (out.elapsed.as_secs_f64() - t - b).max(0.0);
+                rows.push((
+                    integ.lights_per_pass(),
+                    t,
+                    b,
+                    gather,
+                    gather * 1e9 / integ.segments().max(1) as f64,
+                ));
+            }
+            let mean = |f: fn(&(f64, f64, f64, f64, f64)) -> f64| rows.iter().map(f).sum::<f64>() / 3.0;
+            let (lo, hi) =
+                rows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r.3), hi.max(r.3)));
+            let per_seg = mean(|r| r.4);
+            let base = *first.get_or_insert(per_seg);
+            println!(
+                "| {:.0} | {:.2} | {:.2} | {:.2} ({lo:.2}-{hi:.2}) | {per_seg:.0} | {:.2} |",
+                mean(|r| r.0),
+                mean(|r| r.1),
+                mean(|r| r.2),
+                mean(|r| r.3),
+                per_seg / base
+            );
+            n *= 10;
+        }
+    }
+    Ok(())
+}
+
 fn frame_seconds(scene: &haze_scene::Scene, integ: &impl Integrator) -> f64 {
     let settings = RenderSettings { spp: 1, ..Default::default() };
     render(scene, integ, &settings, &AtomicBool::new(false), |_| {}).elapsed.as_secs_f64()

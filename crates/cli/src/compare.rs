@@ -1,86 +1,50 @@
 //! `haze compare` (equal-time comparison of methods against a reference) and `haze reference`.
 
-use crate::render_cmd::{load_scene, set_threads, RenderArgs};
+use crate::render_cmd::{load_scene, render_and_write, set_threads, Outputs};
+use crate::results::{CurvePoint, MethodLabel, MethodResult};
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser};
-use haze_engine::methods::{Method, MethodOptions};
-use haze_manylight::integrators::{Builder, LightBudget};
-use haze_manylight::tree::bound::BoundKind;
+use clap::Args;
+use haze_engine::options::{self, Scope, OPTIONS};
+use haze_engine::{method_names, prepare, Method, MethodKind, MethodOptions, Spelling};
+use haze_manylight::integrators::LightBudget;
 use haze_render::image_io::RgbImage;
 use haze_render::metrics::Metrics;
 use haze_render::progressive::RenderSettings;
 use haze_render::Film;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-/// Light count of a many-light method when the spec gives none (as `haze render`).
-const DEFAULT_LIGHTS: u64 = 10_000;
-
-/// One method of a comparison: `NAME[:LIGHTS][,epsilon=E][,max_cut=N][,bound=B][,builder=T]`,
-/// e.g. `volpath`,
-/// `vrl:10000`, `vrl_lightcuts:100k,epsilon=0.01`, `vpl_lightcuts:1M`. `LIGHTS` is the number of
-/// virtual lights traced per pass (about; the light-path count is fixed from a pilot run); it
-/// accepts the suffixes `k` (x1000) and `M` (x1000000).
-#[derive(Clone, Debug, PartialEq)]
+/// One method of a comparison: `NAME[:LIGHTS][,KEY=VALUE]...`, e.g. `volpath`, `vrl:10000`,
+/// `vrl_lightcuts:100k,cut_size=2`, `vpl_lightcuts:1M,cut=bound,bound=tight`. `LIGHTS` is `vrls`, the
+/// number of virtual lights traced per pass (about; the light-path count is fixed from a pilot
+/// run); it accepts the suffixes `k` (x1000) and `M` (x1000000). The keys are the method options
+/// of the engine's table (`haze_engine::options`, scope `Method`), checked by the engine.
+#[derive(Clone, Debug)]
 pub struct MethodSpec {
-    pub name: String,
-    pub lights: Option<u64>,
-    pub epsilon: Option<f32>,
-    pub max_cut: Option<u32>,
-    /// Lightcut bound name (`paper`, `conservative`, `tight`), kept as given for display.
-    pub bound: Option<String>,
-    /// Tree builder name (`agglomerative`, `median`).
-    pub builder: Option<String>,
+    pub kind: MethodKind,
+    /// The options as given (`LIGHTS` as `vrls`), in order, values trimmed.
+    pub given: Vec<(&'static str, String)>,
+    /// The resolved options.
+    pub options: MethodOptions,
 }
 
 impl MethodSpec {
-    fn is_lightcuts(&self) -> bool {
-        self.name.ends_with("_lightcuts")
-    }
-
-    /// Lights per pass requested (the default for many-light methods), `None` for volpath.
+    /// Virtual lights per pass requested (`vrls`, the default for many-light methods); `None`
+    /// for volpath or a budget in light paths.
     pub fn light_count(&self) -> Option<u64> {
-        (self.name != "volpath").then(|| self.lights.unwrap_or(DEFAULT_LIGHTS))
+        match (self.kind, self.options.budget) {
+            (MethodKind::VolPath, _) | (_, LightBudget::Paths(_)) => None,
+            (_, LightBudget::Vrls(n)) => Some(n),
+        }
     }
 
     /// A file-name-safe form of the spec, e.g. `vrl_lightcuts-100000_epsilon0.01`.
     pub fn file_stem(&self) -> String {
         self.to_string().replace(':', "-").replace(',', "_").replace('=', "")
     }
-
-    fn options(&self) -> MethodOptions {
-        let mut o = MethodOptions {
-            budget: LightBudget::Vrls(self.light_count().unwrap_or(DEFAULT_LIGHTS)),
-            ..Default::default()
-        };
-        if let Some(e) = self.epsilon {
-            o.lightcuts.cut.epsilon = e;
-        }
-        if let Some(m) = self.max_cut {
-            o.lightcuts.cut.max_cut = m;
-        }
-        // Validated when parsed (`FromStr for MethodSpec`).
-        if let Some(b) = self.bound.as_deref().and_then(|b| b.parse().ok()) {
-            o.lightcuts.bound = b;
-        }
-        if let Some(b) = self.builder.as_deref().and_then(|b| b.parse().ok()) {
-            o.lightcuts.builder = b;
-        }
-        o
-    }
-}
-
-fn parse_count(s: &str) -> Option<u64> {
-    let s = s.replace('_', "");
-    let (digits, scale) = match s.as_bytes().last()? {
-        b'k' => (&s[..s.len() - 1], 1_000),
-        b'M' => (&s[..s.len() - 1], 1_000_000),
-        _ => (&s[..], 1),
-    };
-    digits.parse::<u64>().ok()?.checked_mul(scale)
 }
 
 impl FromStr for MethodSpec {
@@ -93,83 +57,50 @@ impl FromStr for MethodSpec {
             Some((n, l)) => (n, Some(l)),
             None => (head, None),
         };
-        const NAMES: [&str; 5] = ["volpath", "vrl", "vpl", "vrl_lightcuts", "vpl_lightcuts"];
-        if !NAMES.contains(&name) {
-            return Err(format!("unknown method '{name}' in '{s}' (available: {})", NAMES.join(", ")));
-        }
-        let mut spec = MethodSpec {
-            name: name.to_string(),
-            lights: None,
-            epsilon: None,
-            max_cut: None,
-            bound: None,
-            builder: None,
-        };
+        let kind = MethodKind::from_name(name)
+            .ok_or_else(|| format!("unknown method '{name}' in '{s}' (available: {})", method_names()))?;
+        let mut given: Vec<(&'static str, String)> = Vec::new();
         if let Some(l) = lights {
-            if name == "volpath" {
-                return Err(format!("'{s}': volpath takes no light count"));
-            }
-            match parse_count(l) {
-                Some(n) if n > 0 => spec.lights = Some(n),
-                _ => {
-                    return Err(format!(
-                        "'{s}': the light count must be a positive integer (e.g. 10000, 100k, 1M), got '{l}'"
-                    ))
-                }
-            }
+            // `LIGHTS` is `vrls=LIGHTS`, checked by the engine, kept as a plain number.
+            let vrls = options::find("vrls").expect("the engine's vrls option");
+            let count = match vrls.parse(l, Spelling::Keyword).map_err(|e| format!("'{s}': {e}"))? {
+                options::Value::Int(n) => n,
+                other => unreachable!("vrls is a count, got {other:?}"),
+            };
+            given.push(("vrls", count.to_string()));
         }
         for opt in parts {
             let Some((key, value)) = opt.split_once('=') else {
                 return Err(format!("'{s}': options are KEY=VALUE, got '{opt}'"));
             };
-            if !spec.is_lightcuts() {
-                return Err(format!("'{s}': option '{key}' applies only to vrl_lightcuts and vpl_lightcuts"));
-            }
-            match key.trim() {
-                "epsilon" => match value.trim().parse::<f32>() {
-                    Ok(e) if e.is_finite() && e >= 0.0 => spec.epsilon = Some(e),
-                    _ => return Err(format!("'{s}': epsilon must be a number >= 0, got '{value}'")),
-                },
-                "max_cut" => match value.trim().parse::<u32>() {
-                    Ok(m) if m > 0 => spec.max_cut = Some(m),
-                    _ => return Err(format!("'{s}': max_cut must be a positive integer, got '{value}'")),
-                },
-                "bound" => match value.trim().parse::<BoundKind>() {
-                    Ok(_) => spec.bound = Some(value.trim().to_string()),
-                    Err(e) => return Err(format!("'{s}': {e}")),
-                },
-                "builder" => match value.trim().parse::<Builder>() {
-                    Ok(_) => spec.builder = Some(value.trim().to_string()),
-                    Err(e) => return Err(format!("'{s}': {e}")),
-                },
-                other => {
-                    return Err(format!(
-                        "'{s}': unknown option '{other}' (available: epsilon, max_cut, bound, builder)"
-                    ))
+            let key = key.trim();
+            match options::find(key) {
+                Some(spec) if spec.scope == Scope::Method => {
+                    given.push((spec.name, value.trim().to_string()))
+                }
+                _ => {
+                    let known: Vec<&str> =
+                        OPTIONS.iter().filter(|o| o.scope == Scope::Method).map(|o| o.name).collect();
+                    return Err(format!("'{s}': unknown option '{key}' (available: {})", known.join(", ")));
                 }
             }
         }
-        Ok(spec)
+        let pairs: Vec<(&str, &str)> = given.iter().map(|(n, v)| (*n, v.as_str())).collect();
+        let resolved =
+            options::resolve(kind, &pairs, Spelling::Keyword).map_err(|e| format!("'{s}': {e}"))?;
+        Ok(MethodSpec { kind, given, options: resolved.method })
     }
 }
 
 impl fmt::Display for MethodSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.name)?;
-        if let Some(l) = self.lights {
-            write!(f, ":{l}")?;
-        }
-        if let Some(e) = self.epsilon {
-            write!(f, ",epsilon={e}")?;
-        }
-        if let Some(m) = self.max_cut {
-            write!(f, ",max_cut={m}")?;
-        }
-        if let Some(b) = &self.bound {
-            write!(f, ",bound={b}")?;
-        }
-        if let Some(b) = &self.builder {
-            write!(f, ",builder={b}")?;
+        write!(f, "{}", self.kind)?;
+        for (i, (name, value)) in self.given.iter().enumerate() {
+            if i == 0 && *name == "vrls" {
+                write!(f, ":{value}")?;
+            } else {
+                write!(f, ",{name}={value}")?;
+            }
         }
         Ok(())
     }
@@ -192,9 +123,7 @@ pub struct CompareArgs {
     /// Wall-clock budget of each method in seconds, light tracing and tree builds included.
     #[arg(long)]
     pub time: f64,
-    /// A method to compare (repeatable): volpath, vrl:N, vpl:N, vrl_lightcuts:N, vpl_lightcuts:N,
-    /// with N lights per pass (e.g. 10000, 100k, 1M) and lightcut options `,epsilon=E,max_cut=M`.
-    #[arg(long = "method", required = true, value_parser = clap::value_parser!(MethodSpec))]
+    #[arg(long = "method", required = true, value_parser = clap::value_parser!(MethodSpec), help = method_help())]
     pub methods: Vec<MethodSpec>,
     /// Folder for each method's image (METHOD.exr and METHOD.png).
     #[arg(short, long, default_value = "compare")]
@@ -209,6 +138,10 @@ pub struct CompareArgs {
     /// Seed of every method.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Camera samples per pixel of every method's passes (many-light methods share a pass's
+    /// lights between them); default: haze render's.
+    #[arg(long)]
+    pub spp_per_pass: Option<String>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -218,26 +151,6 @@ pub struct CompareArgs {
     /// Exposure of the PNG images in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
-}
-
-/// The error of a method's image at one moment of its run.
-#[derive(Clone, Copy, Debug)]
-pub struct CurvePoint {
-    pub seconds: f64,
-    pub metrics: Metrics,
-}
-
-/// What one method produced in its time budget.
-pub struct MethodResult {
-    pub spec: MethodSpec,
-    pub seconds: f64,
-    pub passes: u32,
-    pub metrics: Metrics,
-    pub mean_cut: Option<f64>,
-    /// Row-major linear RGB.
-    pub image: Vec<f32>,
-    /// Error at the end of passes (geometrically spaced), for the convergence plot.
-    pub curve: Vec<CurvePoint>,
 }
 
 /// Passes to render before the next error sample: every pass at first, then about 25% more
@@ -254,9 +167,10 @@ pub fn run_method(
     reference: &[f32],
     budget: Duration,
     seed: u64,
+    spp_per_pass: u32,
 ) -> Result<MethodResult> {
     let start = Instant::now();
-    let method = Method::build(scene, &spec.name, &spec.options(), seed)?;
+    let method = Method::build(scene, spec.kind, &spec.options, seed)?;
     let cam = &scene.camera;
     let mut film = Film::new(cam.width, cam.height, false);
     let cancel = AtomicBool::new(false);
@@ -269,10 +183,10 @@ pub fn run_method(
         }
         let chunk = next_chunk(passes);
         let settings = RenderSettings {
-            spp: chunk,
+            spp: chunk * spp_per_pass,
             time_limit: (passes > 0).then_some(remaining),
             seed,
-            spp_per_pass: 1,
+            spp_per_pass,
             components: false,
             first_pass: passes,
         };
@@ -292,7 +206,7 @@ pub fn run_method(
     let image = film.mean(None);
     let metrics = Metrics::compute(&image, reference, None);
     Ok(MethodResult {
-        spec: spec.clone(),
+        spec: MethodLabel { text: spec.to_string(), file_stem: spec.file_stem(), lights: spec.light_count() },
         seconds,
         passes,
         metrics,
@@ -300,6 +214,13 @@ pub fn run_method(
         image,
         curve,
     })
+}
+
+/// Checks a number of seconds as the engine checks `time`.
+fn seconds(flag: &str, t: f64) -> Result<()> {
+    let spec = options::find("time").expect("the engine's time option");
+    spec.kind.parse(&t.to_string()).map_err(|what| anyhow::anyhow!("{flag} {what} of seconds, got {t}"))?;
+    Ok(())
 }
 
 /// The results as a markdown table.
@@ -321,9 +242,7 @@ pub fn markdown_table(results: &[MethodResult]) -> String {
 
 pub fn run(args: CompareArgs) -> Result<()> {
     set_threads(args.threads)?;
-    if !(args.time.is_finite() && args.time > 0.0) {
-        bail!("--time must be a positive number of seconds, got {}", args.time);
-    }
+    seconds("--time", args.time)?;
     if args.reference.is_some() && args.reference_time.is_some() {
         bail!("--reference-time only applies when no --reference is given");
     }
@@ -333,9 +252,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         Some(path) => path.clone(),
         None => {
             let time = args.reference_time.unwrap_or(10.0 * args.time);
-            if !(time.is_finite() && time > 0.0) {
-                bail!("--reference-time must be a positive number of seconds, got {time}");
-            }
+            seconds("--reference-time", time)?;
             let output = args.out_dir.join("reference.exr");
             eprintln!(
                 "no --reference given: rendering one with volpath for {time:.1} s into {}",
@@ -366,11 +283,19 @@ pub fn run(args: CompareArgs) -> Result<()> {
             h
         );
     }
-    let budget = Duration::from_secs_f64(args.time);
+    let budget = crate::limits::seconds("--time", args.time)?;
+    let spp_per_pass = match &args.spp_per_pass {
+        Some(text) => {
+            let spec = options::find("spp_per_pass").expect("the table has spp_per_pass");
+            let o = options::resolve(MethodKind::VolPath, &[(spec.name, text)], Spelling::Flag)?;
+            o.spp_per_pass
+        }
+        None => options::Options::defaults().spp_per_pass,
+    };
     let mut results = Vec::new();
     for spec in &args.methods {
         eprintln!("{spec}: rendering for {:.1} s", args.time);
-        let r = run_method(&scene, spec, &reference.data, budget, args.seed)
+        let r = run_method(&scene, spec, &reference.data, budget, args.seed, spp_per_pass)
             .with_context(|| format!("{}: method {spec}", args.scene.display()))?;
         let img = RgbImage::new(w, h, r.image.clone());
         let exr = args.out_dir.join(format!("{}.exr", spec.file_stem()));
@@ -438,35 +363,41 @@ pub struct ReferenceArgs {
     pub define: Vec<String>,
 }
 
-#[derive(Parser)]
-struct RenderCommandLine {
-    #[command(flatten)]
-    render: RenderArgs,
-}
-
-/// `haze reference`: `haze render --integrator volpath --time T` under another name.
+/// `haze reference`: `haze render --integrator volpath --time T`, through the engine.
 pub fn reference(args: ReferenceArgs) -> Result<()> {
-    let mut argv: Vec<String> =
-        vec!["haze".into(), path_arg(&args.scene), "-o".into(), path_arg(&args.output)];
-    argv.extend(["--integrator".into(), "volpath".into(), "--time".into(), args.time.to_string()]);
-    argv.extend(["--seed".into(), args.seed.to_string()]);
-    if let Some(t) = args.threads {
-        argv.extend(["--threads".into(), t.to_string()]);
-    }
-    for d in &args.define {
-        argv.extend(["-D".into(), d.clone()]);
-    }
-    let parsed = RenderCommandLine::try_parse_from(argv).context("haze reference")?;
-    crate::render_cmd::run(parsed.render)
+    set_threads(args.threads)?;
+    let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
+    let (time, seed) = (args.time.to_string(), args.seed.to_string());
+    let (kind, options) =
+        prepare(&scene, Some("volpath"), &[("time", &time), ("seed", &seed)], Spelling::Flag)?;
+    let outputs = Outputs {
+        output: &args.output,
+        exposure: 0.0,
+        variance_out: None,
+        cut_image: None,
+        quiet: false,
+        inputs: &inputs,
+    };
+    render_and_write(&args.scene, &scene, kind, &options, &outputs)
 }
 
-fn path_arg(p: &Path) -> String {
-    p.to_string_lossy().into_owned()
+/// The help of `--method`, with the engine's method names and method options.
+fn method_help() -> String {
+    let keys: Vec<&str> = OPTIONS.iter().filter(|o| o.scope == Scope::Method).map(|o| o.name).collect();
+    format!(
+        "A method to compare (repeatable): NAME[:LIGHTS][,KEY=VALUE]..., NAME one of {}, LIGHTS the \
+         virtual lights per pass (vrls; e.g. 10000, 100k, 1M), KEY one of {} (as `haze render \
+         --help` describes them; e.g. vrl_lightcuts:100k,cut=bound,epsilon=0.01,bound=tight)",
+        method_names(),
+        keys.join(", ")
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use haze_manylight::integrators::Builder;
+    use haze_manylight::tree::bound::BoundKind;
 
     fn spec(s: &str) -> MethodSpec {
         s.parse().unwrap_or_else(|e| panic!("{s}: {e}"))
@@ -474,28 +405,22 @@ mod tests {
 
     #[test]
     fn parses_the_paper_methods() {
-        assert_eq!(
-            spec("volpath"),
-            MethodSpec {
-                name: "volpath".into(),
-                lights: None,
-                epsilon: None,
-                max_cut: None,
-                bound: None,
-                builder: None
-            }
-        );
-        assert_eq!(spec("vrl:10000").lights, Some(10_000));
-        assert_eq!(spec("vrl_lightcuts:100k").lights, Some(100_000));
-        assert_eq!(spec("vpl_lightcuts:1M").lights, Some(1_000_000));
-        assert_eq!(spec("vpl_lightcuts:1_000_000").lights, Some(1_000_000));
-        let s = spec("vrl_lightcuts:100000,epsilon=0.01,max_cut=500");
-        assert_eq!((s.epsilon, s.max_cut), (Some(0.01), Some(500)));
-        let s = spec("vrl_lightcuts:10k,bound=tight,builder=median");
-        let o = s.options();
+        let v = spec("volpath");
+        assert_eq!((v.kind, v.given.len(), v.light_count()), (MethodKind::VolPath, 0, None));
+        assert_eq!(spec("vrl:10000").light_count(), Some(10_000));
+        assert_eq!(spec("vrl_lightcuts:100k").light_count(), Some(100_000));
+        assert_eq!(spec("vpl_lightcuts:1M").light_count(), Some(1_000_000));
+        assert_eq!(spec("vpl_lightcuts:1_000_000").light_count(), Some(1_000_000));
+        let s = spec("vrl_lightcuts:100000,cut=bound,epsilon=0.01,max_cut=500");
+        assert_eq!((s.options.lightcuts.cut.epsilon, s.options.lightcuts.cut.max_cut), (0.01, 500));
+        let o = spec("vrl_lightcuts:10k,cut=bound,bound=tight,builder=median").options;
         assert_eq!((o.lightcuts.bound, o.lightcuts.builder), (BoundKind::Tight, Builder::MedianSplit));
-        assert_eq!(spec("vrl").light_count(), Some(DEFAULT_LIGHTS));
-        assert_eq!(spec("volpath").light_count(), None);
+        // The defaults are the engine's.
+        let defaults = options::Options::defaults().method;
+        assert_eq!(spec("vrl").options.budget, defaults.budget);
+        assert_eq!(spec("vrl").light_count(), Some(10_000));
+        assert_eq!(spec("vpl,light_paths=40").light_count(), None);
+        assert_eq!(spec("vpl,vpl_clamp=3").options.vpl_clamp, Some(3.0));
     }
 
     #[test]
@@ -503,35 +428,63 @@ mod tests {
         for s in [
             "volpath",
             "vrl:10000",
-            "vrl_lightcuts:100000,epsilon=0.01",
-            "vpl_lightcuts:5,max_cut=7",
-            "vrl_lightcuts:100,bound=conservative,builder=median",
+            "vrl_lightcuts:100000,cut=bound,epsilon=0.01",
+            "vpl_lightcuts:5,cut=bound,max_cut=7",
+            "vrl_lightcuts:100,cut=bound,bound=conservative,builder=median",
+            "vpl,light_paths=40,vpl_clamp=2",
         ] {
             assert_eq!(spec(s).to_string(), s);
         }
-        assert_eq!(spec("vrl_lightcuts:100000,epsilon=0.01").file_stem(), "vrl_lightcuts-100000_epsilon0.01");
+        assert_eq!(spec("vrl_lightcuts:100000,cut_size=2").file_stem(), "vrl_lightcuts-100000_cut_size2");
     }
 
     #[test]
     fn bad_specs_are_clear_errors() {
         for (s, expected) in [
             ("bdpt", "unknown method 'bdpt'"),
-            ("volpath:10", "volpath takes no light count"),
+            ("volpath:10", "vrls does not apply to volpath"),
             ("vrl:0", "positive integer"),
             ("vrl:ten", "got 'ten'"),
-            ("vrl:10,epsilon=0.1", "only to vrl_lightcuts"),
+            ("vrl:10,epsilon=0.1", "epsilon does not apply to vrl (only to vrl_lightcuts, vpl_lightcuts)"),
+            ("vpl_lightcuts,vpl_clamp=1", "vpl_clamp does not apply to vpl_lightcuts"),
             ("vrl_lightcuts:10,epsilon=-1", "epsilon must be a number >= 0"),
+            ("vrl_lightcuts:10,epsilon=nan", "epsilon must be a number >= 0"),
             ("vrl_lightcuts:10,epsilon", "KEY=VALUE"),
-            (
-                "vrl_lightcuts:10,bound=loose",
-                "the bound must be 'paper', 'conservative' or 'tight', got 'loose'",
-            ),
-            ("vrl_lightcuts:10,builder=sah", "the builder must be 'agglomerative' or 'median', got 'sah'"),
+            ("vrl_lightcuts:10,bound=loose", "bound must be 'paper', 'conservative' or 'tight', got 'loose'"),
+            ("vrl_lightcuts:10,builder=sah", "builder must be 'agglomerative' or 'median', got 'sah'"),
             ("vrl_lightcuts:10,alpha=2", "unknown option 'alpha'"),
-            ("vpl_lightcuts,max_cut=0", "max_cut must be a positive integer"),
+            ("vrl_lightcuts:10,seed=2", "unknown option 'seed'"),
+            ("vpl_lightcuts,cut=bound,max_cut=0", "max_cut must be a positive integer"),
+            ("vrl:10,light_paths=3", "give either vrls or light_paths, not both"),
         ] {
             let e = s.parse::<MethodSpec>().expect_err(s);
             assert!(e.contains(expected), "{s}: {e}");
+        }
+    }
+
+    #[test]
+    fn every_method_option_with_every_method_is_used_or_rejected_naming_both() {
+        for o in OPTIONS.iter().filter(|o| o.scope == Scope::Method) {
+            for m in MethodKind::ALL {
+                // An option that needs another's value (`epsilon` needs `cut=bound`) gets it.
+                let requirement = match o.requires.filter(|_| o.applies_to.contains(&m)) {
+                    Some((name, value)) => format!(",{name}={value}"),
+                    None => String::new(),
+                };
+                let s = format!("{m}{requirement},{}={}", o.name, o.example);
+                match s.parse::<MethodSpec>() {
+                    Ok(spec) => {
+                        assert!(o.applies_to.contains(&m), "{s} accepted");
+                        let resolved =
+                            options::Options { method: spec.options, ..options::Options::defaults() };
+                        assert_eq!(o.value_in(&resolved).as_deref(), Some(o.example), "{s}");
+                    }
+                    Err(e) => {
+                        assert!(!o.applies_to.contains(&m), "{s}: {e}");
+                        assert!(e.contains(&format!("{} does not apply to {m}", o.name)), "{s}: {e}");
+                    }
+                }
+            }
         }
     }
 

@@ -1,17 +1,20 @@
-//! `haze render --cut-image`: a heat map of the mean lightcut size per pixel.
+//! `haze render --cut-image`: a heat map per pixel of what explains the cut.
 //!
-//! Colour scale: linear from 0 (black) to `--max-cut` (pale yellow), through the "inferno"
-//! colours, fixed so that maps of different runs compare; pixels whose camera path meets no
-//! medium are 0. Below the map a legend strip shows the scale from 0 (left) to `--max-cut`
-//! (right) with white ticks at every quarter; the scale is also printed to stderr.
+//! - `--cut bound`: the mean lightcut size; colour scale linear from 0 (black) to `--max-cut`
+//!   (pale yellow), through the "inferno" colours.
+//! - `--cut stochastic` (fixed size): the largest cut node's share of the cut's importance,
+//!   from 0 to 1: near 1 where one cluster carries the estimate (its sample's noise is the
+//!   pixel's noise), near `1/k` where the light spreads over the whole cut.
+//!
+//! Scales are fixed so that maps of different runs compare; pixels whose camera path meets no
+//! medium are 0. Below the map a legend strip shows the scale with white ticks at every
+//! quarter; the scale is also printed to stderr.
 
 use anyhow::{Context, Result};
 use haze_engine::methods::Method;
-use haze_manylight::integrators::CutSizeProbe;
-use haze_render::progressive::{render, RenderSettings};
+use haze_manylight::integrators::CutStrategy;
 use haze_scene::Scene;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 /// Inferno colour map, sampled at five points (matplotlib's `inferno` at 0, 1/4, 1/2, 3/4, 1).
 const INFERNO: [[f32; 3]; 5] =
@@ -34,14 +37,10 @@ pub fn legend_height(height: usize) -> usize {
 /// first pass) with `method`'s lightcuts integrator, recording the mean cut size per camera
 /// segment of each pixel, and writes the heat map to `path`.
 pub fn write(method: &Method, scene: &Scene, seed: u64, max_cut: u32, path: &Path) -> Result<()> {
-    let Method::Lightcuts(integrator) = method else {
-        anyhow::bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts)");
-    };
-    let settings = RenderSettings { spp: 1, seed, ..Default::default() };
-    let out = render(scene, &CutSizeProbe(integrator), &settings, &AtomicBool::new(false), |_| {});
-    let sizes: Vec<f32> = out.film.mean(None).chunks(3).map(|p| p[0]).collect();
+    let sizes = method.cut_sizes(scene, seed)?;
+    let stochastic = method.cut_strategy() == Some(CutStrategy::Stochastic);
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
-    let scale = max_cut.max(1) as f32;
+    let scale = if stochastic { 1.0 } else { max_cut.max(1) as f32 };
     let lh = legend_height(h);
     let mut bytes = Vec::with_capacity(w * (h + lh) * 3);
     for &s in &sizes {
@@ -59,10 +58,15 @@ pub fn write(method: &Method, scene: &Scene, seed: u64, max_cut: u32, path: &Pat
         .with_context(|| format!("writing {}", path.display()))?;
     let mean = sizes.iter().map(|&s| s as f64).sum::<f64>() / sizes.len().max(1) as f64;
     let max = sizes.iter().copied().fold(0.0f32, f32::max);
+    let what = if stochastic {
+        "largest cut node's share of the stochastic cut's importance per pixel"
+    } else {
+        "mean cut size per pixel"
+    };
     eprintln!(
-        "wrote {} (mean cut size per pixel, 1 spp: colour scale 0 to {max_cut} linear, legend strip of {lh} rows below with ticks at every {}; image mean {mean:.1}, max {max:.1})",
+        "wrote {} ({what}, 1 spp: colour scale 0 to {scale} linear, legend strip of {lh} rows below with ticks at every {}; image mean {mean:.3}, max {max:.3})",
         path.display(),
-        max_cut as f32 / 4.0
+        scale / 4.0
     );
     Ok(())
 }

@@ -3,8 +3,11 @@
 mod bench;
 mod compare;
 mod cut_image;
+mod limits;
+mod output;
 mod render_cmd;
 mod report;
+mod results;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -1,11 +1,9 @@
 //! `haze render`.
 
 use anyhow::{bail, Context, Result};
-use clap::Args;
-use haze_engine::methods::{Method, MethodOptions};
-use haze_manylight::integrators::{Builder, LightBudget, LightcutSettings};
-use haze_manylight::tree::bound::BoundKind;
-use haze_manylight::tree::cut::CutSettings;
+use clap::{Arg, ArgAction, ArgMatches, Args, FromArgMatches};
+use haze_engine::options::{not_applicable, Kind, OPTIONS};
+use haze_engine::{method_names, prepare, Method, MethodKind, Options, Spelling};
 use haze_render::image_io::RgbImage;
 use haze_render::progressive::{PassReport, RenderOutput, RenderSettings};
 use haze_render::Component;
@@ -20,72 +18,96 @@ use std::time::Duration;
 pub struct RenderArgs {
     /// Scene file (Mitsuba 3 XML).
     pub scene: PathBuf,
-    /// Output EXR path; a PNG preview is written next to it.
+    /// Output image: `.exr` (linear RGB, with a PNG preview written next to it) or `.png` (the
+    /// preview only). Other extensions, and any file the scene reads, are refused.
     #[arg(short, long, default_value = "haze.exr")]
     pub output: PathBuf,
-    /// Samples per pixel (default: the scene's sampler `sample_count`).
-    #[arg(long, conflicts_with = "time")]
-    pub spp: Option<u32>,
-    /// Render for this many seconds instead of a fixed sample count.
-    #[arg(long, allow_negative_numbers = true)]
-    pub time: Option<f64>,
-    /// Seed of every random choice; the same seed gives the same image.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
     /// Worker threads (default: all cores). The image does not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Integrator, overriding the scene's `<integrator>`: volpath (volpathmis), vrl, vpl.
-    #[arg(long)]
+    #[arg(long, help = integrator_help())]
     pub integrator: Option<String>,
-    /// Many-light integrators: trace about this many VRLs per pass (the light-path count is
-    /// fixed from a pilot run). Default: 10000.
-    #[arg(long, conflicts_with = "light_paths")]
-    pub vrls: Option<u64>,
-    /// Many-light integrators: trace exactly this many light paths per pass.
-    #[arg(long)]
-    pub light_paths: Option<u64>,
-    /// vpl: clamp the geometry term 1/w^2 at this value (biased; off by default).
-    #[arg(long)]
-    pub vpl_clamp: Option<f32>,
-    /// Lightcuts: refine a cut until every node's bound is at most epsilon times the cut's
-    /// estimate (largest RGB channel of each).
-    #[arg(long, default_value_t = 0.02)]
-    pub epsilon: f32,
-    /// Lightcuts: most nodes in a cut.
-    #[arg(long, default_value_t = 1000)]
-    pub max_cut: u32,
-    /// Lightcuts: cluster bound, `paper` (Vibert et al. 2019), `conservative`, or `tight`
-    /// (conservative, with the VRL integral bounded through the VRLs' directions: log(1/h)
-    /// instead of 1/h near the camera line; docs/lightcuts.md).
-    #[arg(long, default_value = "paper")]
-    pub bound: String,
-    /// Lightcuts: tree builder, `agglomerative` (the paper's 3-step parallel build) or `median`.
-    #[arg(long, default_value = "agglomerative")]
-    pub builder: String,
-    /// Lightcuts: also write a PNG heat map of the mean cut size per pixel (one extra 1-spp
-    /// pass with the same seed). Colour scale linear from 0 (black) to --max-cut (pale yellow,
-    /// "inferno" colours); a legend strip below the map shows it, ticks at every quarter.
+    /// The options of the engine's table (haze_engine::options::OPTIONS).
+    #[command(flatten)]
+    pub options: EngineOptions,
+    /// [vrl_lightcuts, vpl_lightcuts] Also write a PNG heat map of the mean cut size per pixel
+    /// (one extra 1-spp pass with the same seed). Colour scale linear from 0 (black) to
+    /// --max-cut (pale yellow, "inferno" colours); a legend strip below the map shows it, ticks
+    /// at every quarter.
     #[arg(long, value_name = "PNG")]
     pub cut_image: Option<PathBuf>,
     /// Override a scene `<default>` parameter: -D name=value (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
-    /// Also write OUT_emitted.exr, OUT_single.exr, OUT_multiple.exr, OUT_surface.exr (they sum to OUT.exr).
-    #[arg(long)]
-    pub components: bool,
     /// Write the per-pixel variance of one sample to this EXR.
     #[arg(long)]
     pub variance_out: Option<PathBuf>,
-    /// Samples per pixel in each progressive pass.
-    #[arg(long, default_value_t = 1)]
-    pub spp_per_pass: u32,
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
     /// No progress bar.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// The methods `--integrator` takes, from the engine's one list.
+fn integrator_help() -> String {
+    format!(
+        "Integrator, overriding the scene's `<integrator>`: {} (volpathmis is volpath; path is volpath for scenes without media)",
+        method_names()
+    )
+}
+
+/// The options given on the command line, as (name, text) pairs for `options::resolve`: one
+/// flag per entry of the engine's table, with its help text; none has a default here (the
+/// engine's table has them), so a flag is only ever "given" when the user gave it.
+#[derive(Clone, Debug, Default)]
+pub struct EngineOptions {
+    pub given: Vec<(&'static str, String)>,
+}
+
+impl EngineOptions {
+    pub fn pairs(&self) -> Vec<(&str, &str)> {
+        self.given.iter().map(|(n, v)| (*n, v.as_str())).collect()
+    }
+}
+
+impl FromArgMatches for EngineOptions {
+    fn from_arg_matches(matches: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut options = EngineOptions::default();
+        options.update_from_arg_matches(matches)?;
+        Ok(options)
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &ArgMatches) -> Result<(), clap::Error> {
+        for spec in OPTIONS {
+            let value = match spec.kind {
+                Kind::Flag => matches.get_flag(spec.name).then(|| "true".to_string()),
+                _ => matches.get_one::<String>(spec.name).cloned(),
+            };
+            if let Some(v) = value {
+                self.given.retain(|(n, _)| *n != spec.name);
+                self.given.push((spec.name, v));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl clap::Args for EngineOptions {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        OPTIONS.iter().fold(cmd, |cmd, spec| {
+            let arg = Arg::new(spec.name).long(spec.flag()[2..].to_string()).help(spec.help_text());
+            cmd.arg(match spec.kind {
+                Kind::Flag => arg.action(ArgAction::SetTrue),
+                _ => arg.action(ArgAction::Set).value_name("VALUE").allow_negative_numbers(true),
+            })
+        })
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 pub fn parse_defines(define: &[String]) -> Result<Vec<(String, String)>> {
@@ -108,6 +130,7 @@ pub fn set_threads(threads: Option<usize>) -> Result<()> {
         if t == 0 {
             bail!("--threads must be at least 1");
         }
+        crate::limits::check_threads(t)?;
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
@@ -130,77 +153,64 @@ fn install_interrupt_handler() -> Arc<AtomicBool> {
     flag
 }
 
-fn component_path(out: &Path, comp: Component) -> PathBuf {
+pub(crate) fn component_path(out: &Path, comp: Component) -> PathBuf {
     let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
     out.with_file_name(format!("{stem}_{}.exr", comp.name()))
 }
 
-pub fn lightcut_settings(args: &RenderArgs) -> Result<LightcutSettings> {
-    if !(args.epsilon.is_finite() && args.epsilon >= 0.0) {
-        bail!("--epsilon must be a number >= 0, got {}", args.epsilon);
-    }
-    if args.max_cut == 0 {
-        bail!("--max-cut must be at least 1");
-    }
-    let bound: BoundKind = args.bound.parse().map_err(|e| anyhow::anyhow!("--bound: {e}"))?;
-    let builder: Builder = args.builder.parse().map_err(|e| anyhow::anyhow!("--builder: {e}"))?;
-    Ok(LightcutSettings {
-        cut: CutSettings { epsilon: args.epsilon, max_cut: args.max_cut },
-        bound,
-        builder,
-        ..Default::default()
-    })
-}
-
-/// The many-light options of `args`, validated (lightcut options only for lightcut methods).
-fn method_options(args: &RenderArgs, name: &str) -> Result<MethodOptions> {
-    let budget = match (args.vrls, args.light_paths) {
-        (Some(0), _) => bail!("--vrls must be at least 1"),
-        (_, Some(0)) => bail!("--light-paths must be at least 1"),
-        (_, Some(n)) => LightBudget::Paths(n),
-        (Some(n), None) => LightBudget::Vrls(n),
-        (None, None) => LightBudget::Vrls(10_000),
-    };
-    if let Some(c) = args.vpl_clamp {
-        if !(c.is_finite() && c > 0.0) {
-            bail!("--vpl-clamp must be a positive number, got {c}");
-        }
-    }
-    let lightcuts =
-        if name.ends_with("_lightcuts") { lightcut_settings(args)? } else { LightcutSettings::default() };
-    Ok(MethodOptions { budget, vpl_clamp: args.vpl_clamp, lightcuts })
-}
-
 pub fn run(args: RenderArgs) -> Result<()> {
     set_threads(args.threads)?;
-    if let Some(t) = args.time {
-        if !(t.is_finite() && t > 0.0) {
-            bail!("--time must be a positive number of seconds, got {t}");
-        }
+    let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
+    let (kind, options) = prepare(&scene, args.integrator.as_deref(), &args.options.pairs(), Spelling::Flag)
+        .with_context(|| format!("{}", args.scene.display()))?;
+    if args.cut_image.is_some() && !kind.is_lightcuts() {
+        return Err(not_applicable("--cut-image", kind, MethodKind::LIGHTCUTS));
     }
-    if args.spp == Some(0) {
-        bail!("--spp must be at least 1");
-    }
-    if args.spp_per_pass == 0 {
-        bail!("--spp-per-pass must be at least 1");
-    }
-    let scene = load_scene(&args.scene, &args.define)?;
-    let name = args.integrator.clone().unwrap_or_else(|| scene.integrator.name.clone());
-    if args.cut_image.is_some() && !name.ends_with("_lightcuts") {
-        bail!("--cut-image needs a lightcut integrator (vrl_lightcuts or vpl_lightcuts), not '{name}'");
-    }
-    let settings = RenderSettings {
-        spp: if args.time.is_some() { 0 } else { args.spp.unwrap_or(scene.spp) },
-        time_limit: args.time.map(Duration::from_secs_f64),
-        seed: args.seed,
-        spp_per_pass: args.spp_per_pass,
-        components: args.components,
-        first_pass: 0,
+    let outputs = Outputs {
+        output: &args.output,
+        exposure: args.exposure,
+        variance_out: args.variance_out.as_deref(),
+        cut_image: args.cut_image.as_deref(),
+        quiet: args.quiet,
+        inputs: &inputs,
     };
+    render_and_write(&args.scene, &scene, kind, &options, &outputs)
+}
+
+/// Where `render_and_write` writes.
+pub struct Outputs<'a> {
+    pub output: &'a Path,
+    pub exposure: f32,
+    pub variance_out: Option<&'a Path>,
+    pub cut_image: Option<&'a Path>,
+    pub quiet: bool,
+    /// Every file the scene reads (none of them may be overwritten).
+    pub inputs: &'a [PathBuf],
+}
+
+/// Renders `scene` (read from `path`) with `kind` and `options` (Ctrl-C finishes the current
+/// pass) and writes the images: `haze render` and `haze reference`.
+pub fn render_and_write(
+    path: &Path,
+    scene: &Scene,
+    kind: MethodKind,
+    options: &Options,
+    outputs: &Outputs,
+) -> Result<()> {
+    let plan = crate::output::check_render_outputs(outputs, options.components, outputs.inputs)?;
+    crate::limits::check_render(options, scene)?;
+    if let Some(w) = scene.integrator.path_cap_warning() {
+        eprintln!("warning: {w}");
+    }
+    let settings = options.render_settings(scene);
+    let described = options.describe(kind);
+    if !described.is_empty() {
+        eprintln!("{kind}: {described}");
+    }
     let cancel = install_interrupt_handler();
     let cam = &scene.camera;
     let pixels = cam.width as u64 * cam.height as u64;
-    let bar = progress_bar(&settings, args.quiet);
+    let bar = progress_bar(&settings, outputs.quiet);
     let on_pass = |r: &PassReport| {
         let rate = (r.spp_done * pixels) as f64 / r.elapsed.as_secs_f64().max(1e-9);
         bar.set_message(format!("{} spp, {:.2} Msamples/s", r.spp_done, rate * 1e-6));
@@ -209,18 +219,25 @@ pub fn run(args: RenderArgs) -> Result<()> {
             None => bar.set_position(r.spp_done),
         }
     };
-    let options = method_options(&args, &name)?;
-    let method = Method::build(&scene, &name, &options, args.seed)
-        .with_context(|| format!("{}", args.scene.display()))?;
-    let output = method.render(&scene, &settings, &cancel, on_pass);
+    let method = Method::build(scene, kind, &options.method, options.seed)
+        .with_context(|| format!("{}", path.display()))?;
+    let output = method.render(scene, &settings, &cancel, on_pass);
     let summary = method.summary();
     bar.finish_and_clear();
     if let Some(s) = summary {
         eprintln!("{s}");
     }
-    report_and_write(&args, &scene, &name, &output)?;
-    if let Some(path) = &args.cut_image {
-        crate::cut_image::write(&method, &scene, args.seed, args.max_cut, path)?;
+    if let (Some((trace, build)), Some(cut)) = (method.trace_and_build_seconds(), method.mean_cut_size()) {
+        let total = output.elapsed.as_secs_f64();
+        eprintln!(
+            "{kind}: mean cut {cut:.1} nodes per camera segment and tree; time: light tracing {trace:.2} s, tree build {build:.2} s, gather {:.2} s (of {total:.2} s)",
+            (total - trace - build).max(0.0)
+        );
+    }
+    report_and_write(outputs, &plan, options.components, path, scene, kind.name(), &output)?;
+    if let Some(path) = outputs.cut_image {
+        let max_cut = options.method.lightcuts.cut.max_cut;
+        crate::cut_image::write(&method, scene, options.seed, max_cut, path)?;
     }
     Ok(())
 }
@@ -241,10 +258,21 @@ fn progress_bar(settings: &RenderSettings, quiet: bool) -> ProgressBar {
     bar
 }
 
-fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOutput) -> Result<()> {
+fn report_and_write(
+    args: &Outputs,
+    plan: &crate::output::Outputs,
+    components: bool,
+    scene_path: &Path,
+    scene: &Scene,
+    name: &str,
+    out: &RenderOutput,
+) -> Result<()> {
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     if out.film.samples == 0 {
+        if !out.interrupted {
+            bail!("the --time budget ended before the first pass did; nothing written (give more time)");
+        }
         bail!("no samples were rendered (interrupted before the first pass ended); nothing written");
     }
     let secs = out.elapsed.as_secs_f64();
@@ -259,6 +287,7 @@ fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOu
         samples as f64 / secs.max(1e-9) * 1e-6,
         if out.interrupted { ", interrupted" } else { "" }
     );
+    crate::limits::check_invalid_samples(name, out.invalid_samples, samples, scene_path)?;
     if out.invalid_samples > 0 {
         eprintln!("warning: {} samples were NaN or infinite and were discarded", out.invalid_samples);
     }
@@ -266,18 +295,23 @@ fn report_and_write(args: &RenderArgs, scene: &Scene, name: &str, out: &RenderOu
         RgbImage::new(w, h, data).write_exr(path).with_context(|| format!("writing {}", path.display()))
     };
     let full = RgbImage::new(w, h, out.film.mean(None));
-    full.write_exr(&args.output).with_context(|| format!("writing {}", args.output.display()))?;
-    let png = args.output.with_extension("png");
-    full.write_png(&png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
-    eprintln!("wrote {} and {}", args.output.display(), png.display());
-    if args.components {
+    let png = &plan.png;
+    if let Some(exr) = &plan.exr {
+        full.write_exr(exr).with_context(|| format!("writing {}", exr.display()))?;
+    }
+    full.write_png(png, args.exposure).with_context(|| format!("writing {}", png.display()))?;
+    match &plan.exr {
+        Some(exr) => eprintln!("wrote {} and {}", exr.display(), png.display()),
+        None => eprintln!("wrote {}", png.display()),
+    }
+    if components {
         for comp in Component::ALL {
-            let p = component_path(&args.output, comp);
+            let p = component_path(args.output, comp);
             write(&p, out.film.mean(Some(comp)))?;
             eprintln!("wrote {} ({})", p.display(), comp.name());
         }
     }
-    if let Some(v) = &args.variance_out {
+    if let Some(v) = args.variance_out {
         write(v, out.film.sample_variance(None))?;
         eprintln!("wrote {} (per-pixel variance of one sample)", v.display());
     }

@@ -3,7 +3,7 @@
 //! 4x zoomed crops of the image centre, the results table, and log-log convergence plots (error
 //! vs time, sampled at the end of passes) drawn with plotters as SVG. No server or script needed.
 
-use crate::compare::{CurvePoint, MethodResult};
+use crate::results::{CurvePoint, MethodResult};
 use anyhow::{anyhow, Context, Result};
 use haze_render::image_io::RgbImage;
 use haze_render::metrics::{per_pixel_rel_error, REL_GUARD};

@@ -12,8 +12,9 @@ fn repo(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
 }
 
+/// The test data shipped in the repository (`tests/data`, e.g. `validation/scenes/...`).
 fn shared(rel: &str) -> PathBuf {
-    repo("../shared").join(rel)
+    repo("tests/data").join(rel)
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -70,7 +71,7 @@ fn bad_command_line_values_are_clear_errors() {
     let out = tmp("x.exr");
     let o = out.to_str().unwrap();
     for (args, want) in [
-        (vec!["render", s, "-o", o, "--spp", "0"], "--spp must be at least 1"),
+        (vec!["render", s, "-o", o, "--spp", "0"], "--spp must be a positive integer"),
         (vec!["render", s, "-o", o, "--time", "-2"], "--time must be a positive number"),
         (vec!["render", s, "-o", o, "--time", "NaN"], "--time must be a positive number"),
         (vec!["render", s, "-o", o, "--threads", "0", "--spp", "1"], "--threads must be at least 1"),
@@ -179,35 +180,46 @@ fn interrupt_writes_the_passes_finished_so_far() {
 #[test]
 fn cut_image_is_a_heat_map_of_the_image_size() {
     let scene = repo("scenes/bench-smoke-room.xml");
+    // The bound cut maps its size (0 to --max-cut), the stochastic cut the largest cut node's
+    // share of the importance (0 to 1).
+    for (cut, scale) in
+        [("bound", "colour scale 0 to 1000 linear"), ("stochastic", "colour scale 0 to 1 linear")]
+    {
+        let (out, map) = (tmp("cut.exr"), tmp(&format!("cut-map-{cut}.png")));
+        let _ = std::fs::remove_file(&map);
+        let o = render(
+            &scene,
+            &out,
+            &[
+                "-D",
+                "res=24",
+                "--spp",
+                "1",
+                "--integrator",
+                "vrl_lightcuts",
+                "--cut",
+                cut,
+                if cut == "stochastic" { "--cut-size" } else { "--max-cut" },
+                if cut == "stochastic" { "4" } else { "1000" },
+                "--vrls",
+                "3000",
+                "--cut-image",
+                map.to_str().unwrap(),
+            ],
+        );
+        assert!(stderr(&o).contains(scale), "{}", stderr(&o));
+        let img = image::open(&map).expect("cut image readable").to_rgb8();
+        // 24 rows of map and a legend strip of max(24 / 8, 4) = 4 rows.
+        assert_eq!((img.width(), img.height()), (24, 28));
+        let map_pixels: Vec<[u8; 3]> =
+            (0..24).flat_map(|y| (0..24).map(move |x| (x, y))).map(|(x, y)| img.get_pixel(x, y).0).collect();
+        let distinct: std::collections::HashSet<[u8; 3]> = map_pixels.iter().copied().collect();
+        assert!(distinct.len() > 3, "{cut}: the map does not vary: {distinct:?}");
+        // The legend runs from the scale's bottom colour (left) to its top colour (right).
+        assert_eq!(img.get_pixel(0, 27).0, [0, 0, 4]);
+        assert_eq!(img.get_pixel(23, 27).0, [252, 255, 164]);
+    }
     let (out, map) = (tmp("cut.exr"), tmp("cut-map.png"));
-    let _ = std::fs::remove_file(&map);
-    let o = render(
-        &scene,
-        &out,
-        &[
-            "-D",
-            "res=24",
-            "--spp",
-            "1",
-            "--integrator",
-            "vrl_lightcuts",
-            "--vrls",
-            "3000",
-            "--cut-image",
-            map.to_str().unwrap(),
-        ],
-    );
-    assert!(stderr(&o).contains("colour scale 0 to 1000"), "{}", stderr(&o));
-    let img = image::open(&map).expect("cut image readable").to_rgb8();
-    // 24 rows of map and a legend strip of max(24 / 8, 4) = 4 rows.
-    assert_eq!((img.width(), img.height()), (24, 28));
-    let map_pixels: Vec<[u8; 3]> =
-        (0..24).flat_map(|y| (0..24).map(move |x| (x, y))).map(|(x, y)| img.get_pixel(x, y).0).collect();
-    let distinct: std::collections::HashSet<[u8; 3]> = map_pixels.iter().copied().collect();
-    assert!(distinct.len() > 3, "cut sizes do not vary: {distinct:?}");
-    // The legend runs from the scale's bottom colour (left) to its top colour (right).
-    assert_eq!(img.get_pixel(0, 27).0, [0, 0, 4]);
-    assert_eq!(img.get_pixel(23, 27).0, [252, 255, 164]);
     let e = assert_clean_failure(
         &haze(&[
             "render",
@@ -223,5 +235,5 @@ fn cut_image_is_a_heat_map_of_the_image_size() {
         ]),
         "cut image with vrl",
     );
-    assert!(e.contains("--cut-image needs a lightcut integrator"), "{e}");
+    assert!(e.contains("--cut-image does not apply to vrl"), "{e}");
 }

@@ -66,7 +66,7 @@ fn compare_writes_table_images_and_report() {
     assert_eq!((r.width, r.height), (16, 12));
 
     let (out, report) = (dir.join("img"), dir.join("report"));
-    let methods = ["volpath", "vrl:200", "vrl_lightcuts:1k,epsilon=0.05", "vpl_lightcuts:2k"];
+    let methods = ["volpath", "vrl:200", "vrl_lightcuts:1k,cut_size=2", "vpl_lightcuts:2k"];
     let mut args = vec!["compare".to_string(), s(&scene), "--reference".into(), s(&reference)];
     args.extend(["--time", "0.3", "-o"].map(String::from));
     args.extend([s(&out), "--report".into(), s(&report), "--lights-plot".into(), s(&dir.join("lights.svg"))]);
@@ -79,7 +79,7 @@ fn compare_writes_table_images_and_report() {
     assert!(table
         .starts_with("| method | lights | time (s) | passes | RMSE | SMAPE (%) | relMSE | mean cut size |"));
     assert_eq!(table.lines().count(), 2 + methods.len(), "{table}");
-    let stems = ["volpath", "vrl-200", "vrl_lightcuts-1000_epsilon0.05", "vpl_lightcuts-2000"];
+    let stems = ["volpath", "vrl-200", "vrl_lightcuts-1000_cut_size2", "vpl_lightcuts-2000"];
     for (m, stem) in methods.iter().zip(stems) {
         let row = table
             .lines()
@@ -98,7 +98,7 @@ fn compare_writes_table_images_and_report() {
 
     let html = std::fs::read_to_string(report.join("index.html")).unwrap();
     for needle in
-        ["reference.png", "colorbar.png", "convergence_rmse.svg", "vrl_lightcuts-1000_epsilon0.05_error.png"]
+        ["reference.png", "colorbar.png", "convergence_rmse.svg", "vrl_lightcuts-1000_cut_size2_error.png"]
     {
         assert!(html.contains(needle), "index.html lacks {needle}");
     }

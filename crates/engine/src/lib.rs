@@ -1,6 +1,8 @@
 //! haze's front-end API: what the `haze` command line and the Python binding share, so that
 //! neither holds rendering logic of its own.
 //!
+//! - [`options`]: every option of a render, once (name, default, check, help, the methods it
+//!   applies to), and the method names.
 //! - [`methods`]: an integrator chosen by name (`volpath`, `vrl`, `vpl`, `vrl_lightcuts`,
 //!   `vpl_lightcuts`) with its options, and rendering with it.
 //! - [`passes`]: rendering a range of passes and merging ranges rendered elsewhere, bit for bit
@@ -13,10 +15,12 @@
 
 pub mod lights;
 pub mod methods;
+pub mod options;
 pub mod passes;
 
 pub use haze_core as core;
 pub use haze_manylight as manylight;
 pub use haze_render as render;
 pub use haze_scene as scene;
-pub use methods::{Method, MethodOptions, METHOD_NAMES};
+pub use methods::{method_kind, prepare, Method, MethodOptions};
+pub use options::{method_names, MethodKind, Options, Spelling, OPTIONS};

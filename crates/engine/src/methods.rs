@@ -1,10 +1,11 @@
 //! The rendering methods of `haze render --integrator` and `haze compare --method`: one place
-//! that turns a method name and its options into an integrator and renders with it.
+//! that turns a method and its options (`crate::options`) into an integrator and renders with it.
 
-use anyhow::{bail, Result};
+use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
+use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{
-    surface_warning, LightBudget, LightKind, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
-    VplIntegrator, VrlIntegrator,
+    surface_warning, CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator,
+    ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -12,10 +13,8 @@ use haze_render::{Integrator, VolPath};
 use haze_scene::Scene;
 use std::sync::atomic::AtomicBool;
 
-/// Every method name accepted, for error messages.
-pub const METHOD_NAMES: &str = "volpath, volpathmis, vrl, vpl, vrl_lightcuts, vpl_lightcuts";
-
-/// Options of the many-light methods (ignored by volpath).
+/// Options of the many-light methods (volpath has none). Front ends make them with
+/// [`crate::options::resolve`], which owns their defaults and checks.
 #[derive(Clone, Debug)]
 pub struct MethodOptions {
     pub budget: LightBudget,
@@ -24,68 +23,30 @@ pub struct MethodOptions {
     pub lightcuts: LightcutSettings,
 }
 
-impl Default for MethodOptions {
-    fn default() -> Self {
-        MethodOptions { budget: LightBudget::Vrls(10_000), vpl_clamp: None, lightcuts: Default::default() }
-    }
-}
-
-impl MethodOptions {
-    /// The options every front end offers, validated: about `vrls` VRLs per pass or exactly
-    /// `light_paths` light paths (not both; default 10000 VRLs), and the lightcut `epsilon`
-    /// (default 0.02). The rest keep their defaults.
-    pub fn new(vrls: Option<u64>, light_paths: Option<u64>, epsilon: Option<f32>) -> Result<Self> {
-        let budget = match (vrls, light_paths) {
-            (Some(_), Some(_)) => bail!("give either vrls or light_paths, not both"),
-            (Some(0), _) => bail!("vrls must be at least 1"),
-            (_, Some(0)) => bail!("light_paths must be at least 1"),
-            (Some(n), None) => LightBudget::Vrls(n),
-            (None, Some(n)) => LightBudget::Paths(n),
-            (None, None) => LightBudget::Vrls(10_000),
-        };
-        let mut options = MethodOptions { budget, ..Default::default() };
-        if let Some(e) = epsilon {
-            if !(e.is_finite() && e >= 0.0) {
-                bail!("epsilon must be a number >= 0, got {e}");
-            }
-            options.lightcuts.cut.epsilon = e;
+/// The method `name` names for `scene` (`None`: the scene's own `<integrator>`). `path` is
+/// volpath for scenes without media (Mitsuba 3's `path` ignores media).
+pub fn method_kind(scene: &Scene, name: Option<&str>) -> Result<MethodKind> {
+    let name = name.unwrap_or(&scene.integrator.name);
+    if name == "path" {
+        if !scene.media.is_empty() {
+            bail!("integrator 'path' ignores participating media in Mitsuba 3; this scene has media: use volpath");
         }
-        Ok(options)
+        return Ok(MethodKind::VolPath);
     }
+    MethodKind::from_name(name)
+        .ok_or_else(|| anyhow!("unknown integrator '{name}' (available: {})", method_names()))
 }
 
-/// Render settings from a front end's arguments, validated: `spp` samples per pixel (default:
-/// the scene's `sample_count`) or `time` seconds (not both).
-pub fn render_settings(
+/// What every front end does first: the method (`integrator`, default the scene's) and its
+/// options from the `given` (name, text) pairs (see [`crate::options::resolve`]).
+pub fn prepare(
     scene: &Scene,
-    spp: Option<u32>,
-    time: Option<f64>,
-    seed: u64,
-    spp_per_pass: u32,
-    components: bool,
-) -> Result<RenderSettings> {
-    if spp.is_some() && time.is_some() {
-        bail!("give either spp or time, not both");
-    }
-    if spp == Some(0) {
-        bail!("spp must be at least 1");
-    }
-    if let Some(t) = time {
-        if !(t.is_finite() && t > 0.0) {
-            bail!("time must be a positive number of seconds, got {t}");
-        }
-    }
-    if spp_per_pass == 0 {
-        bail!("spp_per_pass must be at least 1");
-    }
-    Ok(RenderSettings {
-        spp: if time.is_some() { 0 } else { spp.unwrap_or(scene.spp) },
-        time_limit: time.map(std::time::Duration::from_secs_f64),
-        seed,
-        spp_per_pass,
-        components,
-        first_pass: 0,
-    })
+    integrator: Option<&str>,
+    given: &[(&str, &str)],
+    spelling: Spelling,
+) -> Result<(MethodKind, Options)> {
+    let kind = method_kind(scene, integrator)?;
+    Ok((kind, resolve(kind, given, spelling)?))
 }
 
 /// A ready-to-render integrator of any kind.
@@ -93,14 +54,15 @@ pub enum Method {
     VolPath(VolPath),
     Vrl(VrlIntegrator),
     Vpl(VplIntegrator),
-    Lightcuts(LightcutsIntegrator),
+    VrlLightcuts(LightcutsIntegrator<Vrls>),
+    VplLightcuts(LightcutsIntegrator<Vpls>),
 }
 
 impl Method {
     /// Builds the integrator `name` for `scene`. Many-light methods fix their light-path count
     /// here (a pilot light-tracing run for `LightBudget::Vrls`) and print the surface warning
     /// of `surface_warning` to stderr.
-    pub fn build(scene: &Scene, name: &str, options: &MethodOptions, seed: u64) -> Result<Method> {
+    pub fn build(scene: &Scene, kind: MethodKind, options: &MethodOptions, seed: u64) -> Result<Method> {
         let many_light = || {
             if let Some(w) = surface_warning(scene) {
                 eprintln!("warning: {w}");
@@ -110,20 +72,16 @@ impl Method {
                 trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
             }
         };
-        Ok(match name {
-            "volpath" | "volpathmis" => Method::VolPath(VolPath::from_spec(&scene.integrator)),
-            "path" if scene.media.is_empty() => Method::VolPath(VolPath::from_spec(&scene.integrator)),
-            "path" => bail!(
-                "integrator 'path' ignores participating media in Mitsuba 3; this scene has media: use volpath"
-            ),
-            "vrl" => Method::Vrl(VrlIntegrator::new(scene, many_light(), seed)?),
-            "vpl" => Method::Vpl(VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?),
-            "vrl_lightcuts" | "vpl_lightcuts" => {
-                let kind = if name == "vrl_lightcuts" { LightKind::Vrl } else { LightKind::Vpl };
-                let lc = options.lightcuts;
-                Method::Lightcuts(LightcutsIntegrator::new(scene, kind, many_light(), lc, seed)?)
+        Ok(match kind {
+            MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
+            MethodKind::Vrl => Method::Vrl(VrlIntegrator::new(scene, many_light(), seed)?),
+            MethodKind::Vpl => Method::Vpl(VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?),
+            MethodKind::VrlLightcuts => {
+                Method::VrlLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
             }
-            other => bail!("unknown integrator '{other}' (available: {METHOD_NAMES})"),
+            MethodKind::VplLightcuts => {
+                Method::VplLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
+            }
         })
     }
 
@@ -139,7 +97,8 @@ impl Method {
             Method::VolPath(i) => render(scene, i, settings, cancel, on_pass),
             Method::Vrl(i) => render(scene, i, settings, cancel, on_pass),
             Method::Vpl(i) => render(scene, i, settings, cancel, on_pass),
-            Method::Lightcuts(i) => render(scene, i, settings, cancel, on_pass),
+            Method::VrlLightcuts(i) => render(scene, i, settings, cancel, on_pass),
+            Method::VplLightcuts(i) => render(scene, i, settings, cancel, on_pass),
         }
     }
 
@@ -149,30 +108,51 @@ impl Method {
             Method::VolPath(i) => i.summary(),
             Method::Vrl(i) => i.summary(),
             Method::Vpl(i) => i.summary(),
-            Method::Lightcuts(i) => i.summary(),
+            Method::VrlLightcuts(i) => i.summary(),
+            Method::VplLightcuts(i) => i.summary(),
+        }
+    }
+
+    /// Per pixel (row-major, 0 where the camera path meets no medium), from one extra 1-spp
+    /// pass (pass 0 with `seed`: the lights and cuts of the image's first pass), the mean over
+    /// the pixel's camera segments of the cut size (`--cut bound`) or of the largest cut node's
+    /// share of the cut's importance (`--cut stochastic`). Lightcut methods only.
+    pub fn cut_sizes(&self, scene: &Scene, seed: u64) -> Result<Vec<f32>> {
+        let settings = RenderSettings { spp: 1, seed, ..Default::default() };
+        let cancel = AtomicBool::new(false);
+        let out = match self {
+            Method::VrlLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
+            Method::VplLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
+            _ => bail!("cut sizes need a lightcut method ({})", crate::options::names(MethodKind::LIGHTCUTS)),
+        };
+        Ok(out.film.mean(None).chunks(3).map(|p| p[0]).collect())
+    }
+
+    /// The lightcut method's cut strategy (`None` for other methods).
+    pub fn cut_strategy(&self) -> Option<CutStrategy> {
+        match self {
+            Method::VrlLightcuts(i) => Some(i.settings.strategy),
+            Method::VplLightcuts(i) => Some(i.settings.strategy),
+            _ => None,
+        }
+    }
+
+    /// Seconds spent tracing light paths and building light trees, summed over passes, for
+    /// lightcut methods (the rest of a render is gathering: the cuts and their lights).
+    pub fn trace_and_build_seconds(&self) -> Option<(f64, f64)> {
+        match self {
+            Method::VrlLightcuts(i) => Some((i.trace_seconds(), i.build_seconds())),
+            Method::VplLightcuts(i) => Some((i.trace_seconds(), i.build_seconds())),
+            _ => None,
         }
     }
 
     /// Mean number of nodes per cut (per camera segment), for lightcut methods.
     pub fn mean_cut_size(&self) -> Option<f64> {
         match self {
-            Method::Lightcuts(i) => Some(i.cut_statistics().0),
+            Method::VrlLightcuts(i) => Some(i.cut_statistics().0),
+            Method::VplLightcuts(i) => Some(i.cut_statistics().0),
             _ => None,
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn options_are_validated() {
-        assert_eq!(MethodOptions::new(None, None, None).unwrap().budget, LightBudget::Vrls(10_000));
-        assert_eq!(MethodOptions::new(None, Some(7), None).unwrap().budget, LightBudget::Paths(7));
-        assert_eq!(MethodOptions::new(None, None, Some(0.1)).unwrap().lightcuts.cut.epsilon, 0.1);
-        assert!(MethodOptions::new(Some(1), Some(1), None).is_err());
-        assert!(MethodOptions::new(Some(0), None, None).is_err());
-        assert!(MethodOptions::new(None, None, Some(f32::NAN)).is_err());
     }
 }

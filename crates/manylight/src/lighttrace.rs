@@ -122,7 +122,11 @@ impl LightTraceSettings {
     /// counts it: a VRL connection adds two events (the VRL point and the camera point) and
     /// volpath evaluates paths with at most `max_depth - 1` events.
     pub fn from_max_depth(max_depth: i32) -> Self {
-        let max_events = if max_depth < 0 { u32::MAX } else { (max_depth as u32).saturating_sub(3) };
+        let max_events = if max_depth < 0 {
+            haze_scene::MAX_PATH_DEPTH
+        } else {
+            (max_depth as u32).min(haze_scene::MAX_PATH_DEPTH).saturating_sub(3)
+        };
         LightTraceSettings { max_events, rr_events: 8 }
     }
 }

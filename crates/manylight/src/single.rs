@@ -1,4 +1,4 @@
-//! Single scattering on camera segments by next-event estimation (notes §1: the part of the
+//! Single scattering on camera segments by next-event estimation (`docs/theory.md` §2, §6: the part of the
 //! medium transport that no VRL or VPL produces).
 //!
 //! For every camera segment and every emitter, one sample: a point and point light is sampled

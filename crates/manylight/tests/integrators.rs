@@ -1,4 +1,4 @@
-//! The `vrl` and `vpl` integrators against `volpath`, component by component, on the shared
+//! The `vrl` and `vpl` integrators against `volpath`, component by component, on the
 //! validation scenes (rendered small so the test takes seconds), and the normalisation of light
 //! tracing.
 //!
@@ -15,17 +15,16 @@ use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator, VolPath};
 use haze_scene::{load_file, LoadOptions, Scene};
+use haze_testkit::data::validation_scene;
 use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 const W: u32 = 24;
 const H: u32 = 18;
 
 fn load_small(name: &str) -> Scene {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("../../../shared/validation/scenes/{name}.xml"));
-    let mut scene = load_file(&p, &LoadOptions::default()).expect("validation scene loads");
+    let mut scene =
+        load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     scene.camera.width = W;
     scene.camera.height = H;
     scene
@@ -156,4 +155,112 @@ fn light_path_count_does_not_change_the_expected_image() {
     }
     let (_, mean_z) = compare(&a, &b, Component::Multiple);
     assert!(mean_z.abs() > 4.0, "a 10% normalisation error went unnoticed: image-mean z = {mean_z:.2}");
+}
+
+/// The stochastic lightcut (`vrl_lightcuts`/`vpl_lightcuts`, default `--cut stochastic`)
+/// against the brute-force `vrl`/`vpl` with the same light-path count, component `multiple`
+/// (the virtual lights' part), for cut sizes 1 (the default), 4 and 16.
+fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
+    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    use haze_manylight::tree::stochastic::StochasticSettings;
+    let scene = load_small(name);
+    let ml = settings(&scene, paths);
+    let vrl = render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 21).unwrap(), passes, 1, 21);
+    let vpl =
+        render_passes(&scene, &VplIntegrator::new(&scene, ml.clone(), 22, None).unwrap(), passes, 1, 22);
+    let mut failures = Vec::new();
+    for cut_size in [1, 4, 16] {
+        let lc = LightcutSettings {
+            stochastic: StochasticSettings { cut_size, ..Default::default() },
+            ..Default::default()
+        };
+        let seed = 30 + cut_size as u64;
+        let a = render_passes(
+            &scene,
+            &LightcutsIntegrator::<Vrls>::new(&scene, ml.clone(), lc, seed).unwrap(),
+            passes,
+            1,
+            seed,
+        );
+        let b = render_passes(
+            &scene,
+            &LightcutsIntegrator::<Vpls>::new(&scene, ml.clone(), lc, seed).unwrap(),
+            passes,
+            1,
+            seed,
+        );
+        for (method, f, reference) in [("vrl_lightcuts", &a, &vrl), ("vpl_lightcuts", &b, &vpl)] {
+            let (r, mean_z) = compare(f, reference, Component::Multiple);
+            println!("{name} {method} k = {cut_size}: {r}; per-pass image-mean z = {mean_z:.2}");
+            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
+                failures.push(format!("{method} k = {cut_size}: {r}; image-mean z = {mean_z:.2}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn foggy_room_stochastic_lightcuts_match_brute_force() {
+    check_stochastic_against_brute_force("foggy-room", 150, 96);
+}
+
+#[test]
+fn hg_box_stochastic_lightcuts_match_brute_force() {
+    check_stochastic_against_brute_force("hg-box", 150, 96);
+}
+
+/// The whole image of the stochastic `vrl_lightcuts` and `vpl_lightcuts` (default cut size)
+/// against the Mitsuba 3 reference of the validation scene at full resolution: the per-pixel
+/// z-test with haze's variance over passes (the reference's 16384-spp noise added as in
+/// haze-render's validation test) and the image-mean z from the per-pass spread.
+fn check_stochastic_against_mitsuba(name: &str, paths: u64, passes: u32) {
+    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    use haze_render::image_io::RgbImage;
+    let reference = RgbImage::read_exr(&haze_testkit::data::validation(&format!("refs/{name}.exr")))
+        .expect("reference EXR");
+    let scene = load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
+    let (w, h) = (reference.width, reference.height);
+    let ml = settings(&scene, paths);
+    let lc = LightcutSettings::default();
+    let a = render_passes(
+        &scene,
+        &LightcutsIntegrator::<Vrls>::new(&scene, ml.clone(), lc, 41).unwrap(),
+        passes,
+        1,
+        41,
+    );
+    let b =
+        render_passes(&scene, &LightcutsIntegrator::<Vpls>::new(&scene, ml, lc, 42).unwrap(), passes, 1, 42);
+    let mut failures = Vec::new();
+    for (method, f) in [("vrl_lightcuts", &a), ("vpl_lightcuts", &b)] {
+        let sample_var = pool_variance(&f.film.sample_variance(None), w, h, 3);
+        let var_mean: Vec<f32> = sample_var.iter().map(|v| v / f.film.samples as f32).collect();
+        let var_ref: Vec<f32> = sample_var.iter().map(|v| v / 16384.0).collect();
+        let r = z_test(&f.film.mean(None), &var_mean, &reference.data, &var_ref, 0.01);
+        let xs: Vec<f64> = f
+            .pass_means
+            .iter()
+            .map(|m| (0..4).map(|c| m[c].iter().sum::<f64>() / 3.0).sum::<f64>())
+            .collect();
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0) / n;
+        let mean_z = (mean - r.reference_mean) / var.sqrt();
+        println!("{name} {method} vs Mitsuba 3: {r}; per-pass image-mean z = {mean_z:.2}");
+        if r.failed_fraction() > 0.005 || mean_z.abs() > 5.0 {
+            failures.push(format!("{method}: {r}; image-mean z = {mean_z:.2}"));
+        }
+    }
+    assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn foggy_room_stochastic_lightcuts_match_mitsuba() {
+    check_stochastic_against_mitsuba("foggy-room", 300, 64);
+}
+
+#[test]
+fn hg_box_stochastic_lightcuts_match_mitsuba() {
+    check_stochastic_against_mitsuba("hg-box", 300, 64);
 }

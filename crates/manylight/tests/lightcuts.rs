@@ -10,22 +10,21 @@
 //!   tests, with no extra tolerance.
 
 use haze_manylight::integrators::{
-    LightBudget, LightKind, LightcutSettings, LightcutsIntegrator, ManyLightSettings, VplIntegrator,
-    VrlIntegrator,
+    CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls,
+    VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_manylight::tree::cut::CutSettings;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator};
 use haze_scene::{load_file, LoadOptions, Scene};
-use haze_testkit::ztest::{pool_variance, z_test};
-use std::path::PathBuf;
+use haze_testkit::data::validation_scene;
+use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
 use std::sync::atomic::AtomicBool;
 
 fn load_small(name: &str, w: u32, h: u32) -> Scene {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join(format!("../../../shared/validation/scenes/{name}.xml"));
-    let mut scene = load_file(&p, &LoadOptions::default()).expect("validation scene loads");
+    let mut scene =
+        load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     scene.camera.width = w;
     scene.camera.height = h;
     scene
@@ -46,22 +45,41 @@ fn film<I: Integrator>(scene: &Scene, integrator: &I, passes: u32, seed: u64) ->
     out.film
 }
 
+/// Per-pixel z-test of the `multiple` component of two `w x h` films (variances pooled over 3x3
+/// pixels, of the mean).
+fn z_test_multiple(a: &Film, b: &Film, w: usize, h: usize) -> ZTestReport {
+    let v = |f: &Film| -> Vec<f32> {
+        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
+            .iter()
+            .map(|x| x / f.samples as f32)
+            .collect()
+    };
+    z_test(&a.mean(Some(Component::Multiple)), &v(a), &b.mean(Some(Component::Multiple)), &v(b), 0.01)
+}
+
 #[test]
 fn exhaustive_cut_reproduces_brute_force() {
     for name in ["hg-box", "foggy-room"] {
         let scene = load_small(name, 16, 12);
-        let exhaustive =
-            LightcutSettings { cut: CutSettings { epsilon: 0.0, max_cut: u32::MAX }, ..Default::default() };
-        for kind in [LightKind::Vrl, LightKind::Vpl] {
-            let lc = LightcutsIntegrator::new(&scene, kind, ml(&scene, 200), exhaustive, 9).unwrap();
-            let a = film(&scene, &lc, 2, 9);
-            let b = match kind {
-                LightKind::Vrl => {
-                    film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 200), 9).unwrap(), 2, 9)
-                }
-                LightKind::Vpl => {
-                    film(&scene, &VplIntegrator::new(&scene, ml(&scene, 200), 9, None).unwrap(), 2, 9)
-                }
+        let exhaustive = LightcutSettings {
+            strategy: CutStrategy::Bound,
+            cut: CutSettings { epsilon: 0.0, max_cut: u32::MAX },
+            ..Default::default()
+        };
+        for kind in ["vrl", "vpl"] {
+            let (a, b, summary) = if kind == "vrl" {
+                let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 200), exhaustive, 9).unwrap();
+                let a = film(&scene, &lc, 2, 9);
+                (
+                    a,
+                    film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 200), 9).unwrap(), 2, 9),
+                    lc.summary(),
+                )
+            } else {
+                let lc = LightcutsIntegrator::<Vpls>::new(&scene, ml(&scene, 200), exhaustive, 9).unwrap();
+                let a = film(&scene, &lc, 2, 9);
+                let b = film(&scene, &VplIntegrator::new(&scene, ml(&scene, 200), 9, None).unwrap(), 2, 9);
+                (a, b, lc.summary())
             };
             let (ma, mb) = (a.mean(None), b.mean(None));
             let mut worst = 0.0f32;
@@ -69,31 +87,22 @@ fn exhaustive_cut_reproduces_brute_force() {
                 let rel = (x - y).abs() / (x.abs().max(y.abs()) + 1e-12);
                 worst = worst.max(rel);
             }
-            println!("{name} {kind:?}: largest relative difference {worst:e}; {}", lc.summary().unwrap());
-            assert!(worst < 1e-4, "{name} {kind:?}: exhaustive lightcut differs from brute force by {worst}");
+            println!("{name} {kind}: largest relative difference {worst:e}; {}", summary.unwrap());
+            assert!(worst < 1e-4, "{name} {kind}: exhaustive lightcut differs from brute force by {worst}");
             assert!(ma.iter().any(|v| *v > 0.0));
         }
     }
 }
 
 #[test]
-fn default_epsilon_agrees_with_brute_force() {
+fn bound_cut_default_epsilon_agrees_with_brute_force() {
     let scene = load_small("foggy-room", 24, 18);
     let passes = 64;
-    let lc =
-        LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(&scene, 300), LightcutSettings::default(), 5)
-            .unwrap();
+    let settings = LightcutSettings { strategy: CutStrategy::Bound, ..Default::default() };
+    let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 300), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 300), 6).unwrap(), passes, 6);
-    let (w, h) = (24, 18);
-    let v = |f: &Film| -> Vec<f32> {
-        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
-            .iter()
-            .map(|x| x / f.samples as f32)
-            .collect()
-    };
-    let r =
-        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts (eps 0.02) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     // Image means: pixels of a pass are correlated, so compare with a loose per-pixel-based
@@ -109,19 +118,12 @@ fn tight_bound_agrees_with_brute_force() {
     use haze_manylight::tree::bound::BoundKind;
     let scene = load_small("hg-box", 24, 18);
     let passes = 48;
-    let settings = LightcutSettings { bound: BoundKind::Tight, ..Default::default() };
-    let lc = LightcutsIntegrator::new(&scene, LightKind::Vrl, ml(&scene, 4000), settings, 5).unwrap();
+    let settings =
+        LightcutSettings { strategy: CutStrategy::Bound, bound: BoundKind::Tight, ..Default::default() };
+    let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 4000), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 4000), 6).unwrap(), passes, 6);
-    let (w, h) = (24, 18);
-    let v = |f: &Film| -> Vec<f32> {
-        pool_variance(&f.sample_variance(Some(Component::Multiple)), w, h, 3)
-            .iter()
-            .map(|x| x / f.samples as f32)
-            .collect()
-    };
-    let r =
-        z_test(&a.mean(Some(Component::Multiple)), &v(&a), &b.mean(Some(Component::Multiple)), &v(&b), 0.01);
+    let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts (tight bound) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");

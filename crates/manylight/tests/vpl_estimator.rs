@@ -162,14 +162,11 @@ fn run(
 fn vpl_estimator_matches_quadrature() {
     let cases = cases();
     let rows = run(&cases, |c, u| c.estimate(u), |c| c.clamp, 4_000_000);
-    println!(
-        "\nVPL estimator vs adaptive quadrature (green channel shown; max over RGB)\n{}",
-        table_header()
+    report_rows(
+        "VPL estimator vs adaptive quadrature (green channel shown; max over RGB)",
+        &rows,
+        "some VPL configurations failed (see table)",
     );
-    for (_, row) in &rows {
-        println!("{row}");
-    }
-    assert!(rows.iter().all(|r| r.0), "some VPL configurations failed (see table)");
 }
 
 #[test]
@@ -205,13 +202,11 @@ fn the_check_rejects_a_wrong_pdf_and_the_clamp_bias() {
     let wrong = run(&some, |c, u| manual(c, u, true), |_| None, 1_500_000);
     let clamped: Vec<Case> = cases().into_iter().filter(|c| c.name.contains("active")).collect();
     let bias = run(&clamped, |c, u| c.estimate(u), |_| None, 1_500_000);
-    println!("\nVPL negative controls (right pdf, uniform pdf, clamped vs unclamped):\n{}", table_header());
-    for (_, row) in right.iter().chain(&wrong).chain(&bias) {
-        println!("{row}");
-    }
-    assert!(right.iter().all(|r| r.0), "the manual estimator with the right pdf must pass");
-    assert!(wrong.iter().all(|r| !r.0), "the check failed to detect a wrong pdf");
-    assert!(bias.iter().all(|r| !r.0), "the check failed to detect the clamping bias");
+    report_controls(
+        "VPL negative controls (right pdf, uniform pdf, clamped vs unclamped)",
+        &right,
+        &[(&wrong, "a wrong pdf"), (&bias, "the clamping bias")],
+    );
 }
 
 /// 10^5 degenerate configurations: the VPL on the camera line (inside, at an end, beyond),
@@ -223,11 +218,8 @@ fn degenerate_configurations_give_finite_bounded_estimates() {
     let mut s = Sampler::from_seed(4243);
     let mut nonzero = 0;
     for i in 0..100_000u32 {
-        let c = haze_core::sampling::sample_uniform_sphere(s.next_2d());
-        let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - Vec3::splat(2.0);
-        let scale = [1e-4f32, 1.0, 100.0][(s.next_u32() % 3) as usize];
-        let len = if i % 11 == 0 { 0.0 } else { scale * (0.01 + 2.0 * s.next_1d()) };
-        let cam = Segment::new(o, c, len);
+        let (cam, scale) = degenerate_camera_segment(&mut s, i);
+        let (c, len) = (cam.d, cam.len);
         let other = haze_core::sampling::sample_uniform_sphere(s.next_2d());
         let p = match i % 6 {
             0 => cam.at(len * s.next_1d()),

@@ -213,14 +213,11 @@ fn vrl_estimator_matches_double_integral() {
         assert_eq!(smp.is_uniform(), parallel, "{}: the case does not test what it says", c.name);
     }
     let rows = run(&cases, |c, u| c.estimate(u), 4_000_000);
-    println!(
-        "\nVRL estimator vs adaptive double integral (green channel shown; max over RGB)\n{}",
-        table_header()
+    report_rows(
+        "VRL estimator vs adaptive double integral (green channel shown; max over RGB)",
+        &rows,
+        "some VRL configurations failed (see table)",
     );
-    for (_, row) in &rows {
-        println!("{row}");
-    }
-    assert!(rows.iter().all(|r| r.0), "some VRL configurations failed (see table)");
 }
 
 /// `vrl_integrand` (the library's `f32` integrand) agrees with the independent `f64` one.
@@ -258,12 +255,11 @@ fn the_check_rejects_a_wrong_pdf() {
     let cases: Vec<Case> = cases().into_iter().take(2).collect();
     let right = run(&cases, |c, u| manual_estimate(c, u, false), 1_500_000);
     let wrong = run(&cases, |c, u| manual_estimate(c, u, true), 1_500_000);
-    println!("\nSampling 1/h but dividing by the uniform pdf must fail:\n{}", table_header());
-    for (_, row) in right.iter().chain(&wrong) {
-        println!("{row}");
-    }
-    assert!(right.iter().all(|r| r.0), "the manual estimator with the right pdf must pass");
-    assert!(wrong.iter().all(|r| !r.0), "the check failed to detect a wrong pdf");
+    report_controls(
+        "Sampling 1/h but dividing by the uniform pdf must fail",
+        &right,
+        &[(&wrong, "a wrong pdf")],
+    );
 }
 
 /// 10^5 degenerate configurations: parallel and coincident lines, lines crossing exactly,
@@ -275,11 +271,8 @@ fn degenerate_configurations_give_finite_bounded_estimates() {
     let mut s = Sampler::from_seed(4242);
     let mut nonzero = 0;
     for i in 0..100_000u32 {
-        let c = haze_core::sampling::sample_uniform_sphere(s.next_2d());
-        let cam_o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - Vec3::splat(2.0);
-        let scale = [1e-4f32, 1.0, 100.0][(s.next_u32() % 3) as usize];
-        let cam_len = if i % 11 == 0 { 0.0 } else { scale * (0.01 + 2.0 * s.next_1d()) };
-        let cam = Segment::new(cam_o, c, cam_len);
+        let (cam, scale) = degenerate_camera_segment(&mut s, i);
+        let c = cam.d;
         let on_line = cam.at(scale * (4.0 * s.next_1d() - 1.0));
         let other = haze_core::sampling::sample_uniform_sphere(s.next_2d());
         let len = if i % 13 == 0 { 0.0 } else { scale * (0.01 + 2.0 * s.next_1d()) };

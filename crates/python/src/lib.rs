@@ -15,7 +15,7 @@ use haze_engine::render::image_io::RgbImage;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyException, PyOSError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 
 pyo3::create_exception!(
     haze,
@@ -116,6 +116,50 @@ fn trace_lights<'py>(
     Ok(d)
 }
 
+/// The engine's table of options (`haze_engine::options::OPTIONS`), one dict per option:
+/// `name`, `flag` (`--max-cut`), `kind` (`count`, `integer`, `number`, `choice`, `flag`),
+/// `choices` (a list, or None), `default` (the default as text, or None when unset),
+/// `default_doc` (what the default is, in words), `help` (with the methods and the default),
+/// `methods` (the methods it applies to), `scope` (`render` or `method`), `conflicts_with`,
+/// `requires` (`None` or `(option, value)`: the option applies only with that value),
+/// `example` (a valid non-default value) and `python_default`: the default a Python signature
+/// shows, the value itself for options of every method that have one, else None (not given).
+#[pyfunction]
+fn method_options(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
+    use haze_engine::options::{Default, Kind, Scope, Value, OPTIONS};
+    OPTIONS
+        .iter()
+        .map(|o| {
+            let d = PyDict::new(py);
+            d.set_item("name", o.name)?;
+            d.set_item("flag", o.flag())?;
+            d.set_item("kind", o.kind.label())?;
+            d.set_item("choices", if let Kind::Choice(c) = o.kind { Some(c.to_vec()) } else { None })?;
+            let (default, doc) = match o.default {
+                Default::Value(v) => (Some(v), v),
+                Default::Unset(what) => (None, what),
+            };
+            d.set_item("default", default)?;
+            d.set_item("default_doc", doc)?;
+            d.set_item("help", o.help_text())?;
+            d.set_item("methods", o.applies_to.iter().map(|m| m.name()).collect::<Vec<_>>())?;
+            d.set_item("scope", if o.scope == Scope::Render { "render" } else { "method" })?;
+            d.set_item("conflicts_with", o.conflicts_with.to_vec())?;
+            d.set_item("example", o.example)?;
+            d.set_item("requires", o.requires)?;
+            let python_default = match (o.applies_to_all(), default.map(|v| o.kind.parse(v))) {
+                (true, Some(Ok(Value::Int(n)))) => n.into_pyobject(py)?.into_any(),
+                (true, Some(Ok(Value::Float(x)))) => x.into_pyobject(py)?.into_any(),
+                (true, Some(Ok(Value::Word(w)))) => w.into_pyobject(py)?.into_any(),
+                (true, Some(Ok(Value::Flag(b)))) => pyo3::types::PyBool::new(py, b).to_owned().into_any(),
+                _ => py.None().into_bound(py),
+            };
+            d.set_item("python_default", python_default)?;
+            Ok(d)
+        })
+        .collect()
+}
+
 /// Reads a linear-RGB OpenEXR image as a float32 array of shape (H, W, 3).
 #[pyfunction]
 fn read_exr<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyAny>> {
@@ -154,7 +198,9 @@ fn write_png(path: std::path::PathBuf, image: PyReadonlyArrayDyn<'_, f32>, expos
 #[pymodule]
 fn _haze(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
-    m.add("METHOD_NAMES", haze_engine::METHOD_NAMES)?;
+    let names: Vec<&str> = haze_engine::MethodKind::ALL.iter().map(|m| m.name()).collect();
+    m.add("METHOD_NAMES", PyTuple::new(m.py(), names)?)?;
+    m.add_function(wrap_pyfunction!(method_options, m)?)?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<film::Film>()?;
     m.add_function(wrap_pyfunction!(scene::load_scene, m)?)?;

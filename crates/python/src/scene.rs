@@ -2,10 +2,13 @@
 
 use crate::film::Film;
 use crate::{interrupt, value_error, SceneError};
-use haze_engine::methods::{render_settings, Method, MethodOptions};
-use haze_engine::passes::{render_passes, PassSettings};
+use haze_engine::passes::render_passes;
 use haze_engine::scene::{load_file_with_sources, LoadError, LoadOptions};
+use haze_engine::{prepare, Method, Options, Spelling};
+use numpy::PyArrayMethods;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -39,15 +42,37 @@ pub fn load_scene(py: Python<'_>, path: PathBuf, defines: Vec<(String, String)>)
     Ok(Scene { inner: Arc::new(scene), path, files })
 }
 
-/// The method `integrator` (default: the scene's own) with its options.
+/// The keyword options of a render (`**options` of the binding), as (name, text) pairs for
+/// `haze_engine::options::resolve`: `None` values are left out (not given), `True`/`False` are
+/// `true`/`false`, anything else its `str()`; the engine checks the text as it checks the
+/// command line's.
+fn given(options: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
+    let mut out = Vec::new();
+    if let Some(d) = options {
+        for (k, v) in d.iter() {
+            if v.is_none() {
+                continue;
+            }
+            let text = if v.is_instance_of::<PyBool>() {
+                if v.extract::<bool>()? { "true" } else { "false" }.to_string()
+            } else {
+                v.str()?.to_string()
+            };
+            out.push((k.extract::<String>()?, text));
+        }
+    }
+    Ok(out)
+}
+
+/// The method `integrator` (default: the scene's own) with the `given` options.
 fn method(
     scene: &haze_engine::scene::Scene,
-    integrator: Option<String>,
-    options: &MethodOptions,
-    seed: u64,
-) -> anyhow::Result<Method> {
-    let name = integrator.unwrap_or_else(|| scene.integrator.name.clone());
-    Method::build(scene, &name, options, seed)
+    integrator: Option<&str>,
+    given: &[(String, String)],
+) -> anyhow::Result<(Method, Options)> {
+    let pairs: Vec<(&str, &str)> = given.iter().map(|(n, v)| (n.as_str(), v.as_str())).collect();
+    let (kind, options) = prepare(scene, integrator, &pairs, Spelling::Keyword)?;
+    Ok((Method::build(scene, kind, &options.method, options.seed)?, options))
 }
 
 #[pymethods]
@@ -86,30 +111,21 @@ impl Scene {
         self.inner.integrator.name.clone()
     }
 
-    /// Renders progressively (as `haze render` does) and returns the film. Releases the GIL;
-    /// Ctrl-C stops after the current pass and raises KeyboardInterrupt.
-    #[pyo3(signature = (integrator=None, spp=None, time=None, seed=0, vrls=None, light_paths=None,
-                        epsilon=None, components=false, spp_per_pass=1))]
-    #[allow(clippy::too_many_arguments)]
+    /// Renders progressively (as `haze render` does) and returns the film. `options` are the
+    /// engine's (`method_options()`), by name. Releases the GIL; Ctrl-C stops after the current
+    /// pass and raises KeyboardInterrupt.
+    #[pyo3(signature = (integrator=None, **options))]
     fn render(
         &self,
         py: Python<'_>,
         integrator: Option<String>,
-        spp: Option<u32>,
-        time: Option<f64>,
-        seed: u64,
-        vrls: Option<u64>,
-        light_paths: Option<u64>,
-        epsilon: Option<f32>,
-        components: bool,
-        spp_per_pass: u32,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Film> {
+        let given = given(options)?;
         let scene = self.inner.clone();
         let out = interrupt::run(py, move |cancel| -> anyhow::Result<_> {
-            let settings = render_settings(&scene, spp, time, seed, spp_per_pass, components)?;
-            let options = MethodOptions::new(vrls, light_paths, epsilon)?;
-            let m = method(&scene, integrator, &options, seed)?;
-            Ok(m.render(&scene, &settings, cancel, |_| {}))
+            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
+            Ok(m.render(&scene, &options.render_settings(&scene), cancel, |_| {}))
         })?
         .map_err(value_error)?;
         Ok(Film { inner: out.film })
@@ -117,33 +133,74 @@ impl Scene {
 
     /// Renders the passes `first .. first + count` (each of `spp_per_pass` samples) and sums
     /// them over the pass tree (`haze_engine::passes`): the film that merging any split of these
-    /// passes rendered elsewhere gives, bit for bit. Releases the GIL; Ctrl-C interrupts.
-    #[pyo3(signature = (integrator=None, first=0, count=1, spp_per_pass=1, seed=0, vrls=None,
-                        light_paths=None, epsilon=None, components=false))]
-    #[allow(clippy::too_many_arguments)]
+    /// passes rendered elsewhere gives, bit for bit. `options` as for `render`, without `spp` and
+    /// `time` (the passes are the budget). Releases the GIL; Ctrl-C interrupts.
+    #[pyo3(signature = (integrator=None, first=0, count=1, **options))]
     fn render_passes(
         &self,
         py: Python<'_>,
         integrator: Option<String>,
         first: u32,
         count: u32,
-        spp_per_pass: u32,
-        seed: u64,
-        vrls: Option<u64>,
-        light_paths: Option<u64>,
-        epsilon: Option<f32>,
-        components: bool,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Film> {
+        let given = given(options)?;
+        if let Some((name, _)) = given.iter().find(|(n, _)| n == "spp" || n == "time") {
+            return Err(PyValueError::new_err(format!(
+                "render_passes renders `count` passes: {name} does not apply (use render)"
+            )));
+        }
         let scene = self.inner.clone();
         let out = interrupt::run(py, move |cancel| -> anyhow::Result<_> {
-            let options = MethodOptions::new(vrls, light_paths, epsilon)?;
-            let m = method(&scene, integrator, &options, seed)?;
-            let settings = PassSettings { seed, spp_per_pass, components };
+            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
             let end = first.checked_add(count).ok_or_else(|| anyhow::anyhow!("pass indices overflow"))?;
-            render_passes(&m, &scene, &settings, first..end, cancel, |_| {})
+            render_passes(&m, &scene, &options.pass_settings(), first..end, cancel, |_| {})
         })?
         .map_err(value_error)?;
         Ok(Film { inner: out.film })
+    }
+
+    /// The mean cut size per pixel, float32 (H, W), of a lightcut method: one extra 1-spp pass
+    /// (pass 0 with `seed`: the cuts of the image's first pass), as `haze render --cut-image`
+    /// draws it. `options` as for `render`, without the sample budget (`spp`, `time`,
+    /// `spp_per_pass`, `components`). Releases the GIL.
+    #[pyo3(signature = (integrator=None, **options))]
+    fn cut_sizes<'py>(
+        &self,
+        py: Python<'py>,
+        integrator: Option<String>,
+        options: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let given = given(options)?;
+        let budget = ["spp", "time", "spp_per_pass", "components"];
+        if let Some((name, _)) = given.iter().find(|(n, _)| budget.contains(&n.as_str())) {
+            return Err(PyValueError::new_err(format!(
+                "cut_sizes renders one 1-spp pass: {name} does not apply"
+            )));
+        }
+        let scene = self.inner.clone();
+        let sizes = interrupt::run(py, move |_| -> anyhow::Result<_> {
+            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
+            m.cut_sizes(&scene, options.seed)
+        })?
+        .map_err(value_error)?;
+        let (w, h) = (self.inner.camera.width as usize, self.inner.camera.height as usize);
+        Ok(numpy::PyArray1::from_vec(py, sizes).reshape([h, w])?.into_any())
+    }
+
+    /// Checks `options` for the method `integrator` as `render` would, without rendering, and
+    /// returns the method's name (e.g. `volpath` for a scene whose integrator is `volpathmis`).
+    #[pyo3(signature = (integrator=None, **options))]
+    fn check_options(
+        &self,
+        integrator: Option<String>,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<String> {
+        let given = given(options)?;
+        let pairs: Vec<(&str, &str)> = given.iter().map(|(n, v)| (n.as_str(), v.as_str())).collect();
+        let (kind, _) =
+            prepare(&self.inner, integrator.as_deref(), &pairs, Spelling::Keyword).map_err(value_error)?;
+        Ok(kind.name().to_string())
     }
 
     fn __repr__(&self) -> String {

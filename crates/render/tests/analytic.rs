@@ -59,25 +59,38 @@ fn medium(sigma_t: Rgb, albedo: Rgb, phase: Phase) -> Medium {
 /// A cube slab `[-1, 1]^3` of absorbing medium behind a null boundary, lit by a uniform
 /// environment of radiance 1: the radiance through its centre is `exp(-2 sigma_t)` per channel
 /// (Beer-Lambert), all of it in the `emitted` component.
+/// A scene of one shape (interior medium `interior`, no emitter) whose only medium is `medium`,
+/// under a constant environment of radiance 1, seen by [`camera`].
+fn one_shape_in_environment(
+    camera_medium: Option<u32>,
+    name: &str,
+    geometry: Geometry,
+    bsdf: Bsdf,
+    interior: Option<u32>,
+    medium: Medium,
+) -> Scene {
+    let shape = Shape { name: name.into(), geometry, bsdf, interior, exterior: None, emitter: None };
+    Scene::new(
+        None,
+        camera(camera_medium),
+        1,
+        IntegratorSpec::default(),
+        vec![shape],
+        vec![medium],
+        vec![Emitter::Constant { radiance: Rgb::ONE }],
+    )
+}
+
 #[test]
 fn transmittance_through_a_slab() {
     let sigma_t = Rgb::new(0.25, 1.0, 2.0);
-    let shapes = vec![Shape {
-        name: "slab".into(),
-        geometry: Geometry::Mesh(cube_mesh(&Mat4::IDENTITY, false)),
-        bsdf: Bsdf::Null,
-        interior: Some(0),
-        exterior: None,
-        emitter: None,
-    }];
-    let scene = Scene::new(
+    let scene = one_shape_in_environment(
         None,
-        camera(None),
-        1,
-        IntegratorSpec::default(),
-        shapes,
-        vec![medium(sigma_t, Rgb::ZERO, Phase::Isotropic)],
-        vec![Emitter::Constant { radiance: Rgb::ONE }],
+        "slab",
+        Geometry::Mesh(cube_mesh(&Mat4::IDENTITY, false)),
+        Bsdf::Null,
+        Some(0),
+        medium(sigma_t, Rgb::ZERO, Phase::Isotropic),
     );
     let ray = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
     let (mean, se) = estimate(&scene, ray, None, 40_000, 1);
@@ -145,22 +158,13 @@ fn single_scattering_of_a_point_light_matches_quadrature() {
 #[test]
 fn white_furnace_in_infinite_scattering_medium() {
     // A large null sphere of medium (radius 50) around the camera, environment outside.
-    let shapes = vec![Shape {
-        name: "ball".into(),
-        geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 3.0, flip_normals: false },
-        bsdf: Bsdf::Null,
-        interior: Some(0),
-        exterior: None,
-        emitter: None,
-    }];
-    let scene = Scene::new(
-        None,
-        camera(Some(0)),
-        1,
-        IntegratorSpec::default(),
-        shapes,
-        vec![medium(Rgb::new(1.0, 2.0, 0.5), Rgb::ONE, Phase::HenyeyGreenstein { g: 0.3 })],
-        vec![Emitter::Constant { radiance: Rgb::ONE }],
+    let scene = one_shape_in_environment(
+        Some(0),
+        "ball",
+        Geometry::Sphere { center: Vec3::ZERO, radius: 3.0, flip_normals: false },
+        Bsdf::Null,
+        Some(0),
+        medium(Rgb::new(1.0, 2.0, 0.5), Rgb::ONE, Phase::HenyeyGreenstein { g: 0.3 }),
     );
     let ray = Ray::new(Vec3::ZERO, Vec3::new(0.3, 0.2, 0.9).normalize());
     let (mean, se) = estimate(&scene, ray, Some(0), 20_000, 3);
@@ -183,22 +187,13 @@ fn white_furnace_in_infinite_scattering_medium() {
 #[test]
 fn glass_ball_white_furnace() {
     for interior in [None, Some(0u32)] {
-        let shapes = vec![Shape {
-            name: "glass".into(),
-            geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
-            bsdf: Bsdf::Dielectric { eta: 1.5 },
-            interior,
-            exterior: None,
-            emitter: None,
-        }];
-        let scene = Scene::new(
+        let scene = one_shape_in_environment(
             None,
-            camera(None),
-            1,
-            IntegratorSpec::default(),
-            shapes,
-            vec![medium(Rgb::new(0.5, 1.0, 2.0), Rgb::ONE, Phase::HenyeyGreenstein { g: -0.4 })],
-            vec![Emitter::Constant { radiance: Rgb::ONE }],
+            "glass",
+            Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
+            Bsdf::Dielectric { eta: 1.5 },
+            interior,
+            medium(Rgb::new(0.5, 1.0, 2.0), Rgb::ONE, Phase::HenyeyGreenstein { g: -0.4 }),
         );
         for o in [Vec3::new(0.0, 0.0, -4.0), Vec3::new(0.6, 0.0, -4.0), Vec3::new(0.0, 0.95, -4.0)] {
             let (mean, se) = estimate(&scene, Ray::new(o, Vec3::Z), None, 20_000, 5);

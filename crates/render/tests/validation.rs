@@ -1,5 +1,5 @@
-//! volpath against Mitsuba 3 references on the shared validation scenes
-//! (`../shared/validation`, 16384 spp Mitsuba 3.9.1 `volpath` renders).
+//! volpath against Mitsuba 3 references on the validation scenes
+//! (`tests/data/validation`, 16384 spp Mitsuba 3.9.1 `volpath` renders).
 //!
 //! Statistic: per channel-pixel `z = (haze - ref) / sqrt(var_haze/n + var_ref)`, with haze's own
 //! per-pixel sample variance and, for the reference's noise, the same per-sample variance over
@@ -15,19 +15,14 @@ use haze_render::image_io::RgbImage;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::VolPath;
 use haze_scene::{load_file, LoadOptions, Scene};
+use haze_testkit::data::{validation, validation_scene};
 use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 const REFERENCE_SPP: f32 = 16384.0;
 
-fn shared(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/validation").join(rel)
-}
-
 fn load(name: &str) -> Scene {
-    load_file(&shared(&format!("scenes/{name}.xml")), &LoadOptions::default())
-        .expect("validation scene loads")
+    load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads")
 }
 
 fn compare(scene: &Scene, name: &str, spp: u32, seed: u64) -> ZTestReport {
@@ -35,7 +30,7 @@ fn compare(scene: &Scene, name: &str, spp: u32, seed: u64) -> ZTestReport {
     let out =
         render(scene, &VolPath::from_spec(&scene.integrator), &settings, &AtomicBool::new(false), |_| {});
     assert_eq!(out.invalid_samples, 0, "NaN/Inf samples");
-    let reference = RgbImage::read_exr(&shared(&format!("refs/{name}.exr"))).expect("reference EXR");
+    let reference = RgbImage::read_exr(&validation(&format!("refs/{name}.exr"))).expect("reference EXR");
     assert_eq!(
         (reference.width, reference.height),
         (scene.camera.width as usize, scene.camera.height as usize)

@@ -8,7 +8,6 @@
 use crate::emitter::Emitter;
 use crate::medium::MediumId;
 use crate::scene::Scene;
-use crate::shape::{AreaSampler, Shape};
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
 use haze_core::Rgb;
@@ -28,25 +27,6 @@ pub struct EmitterSample {
     pub pdf: f32,
     pub is_delta: bool,
     pub emitter: u32,
-}
-
-/// Per-emitter data needed to sample it (area tables of area lights).
-#[derive(Clone, Debug, Default)]
-pub struct EmitterTables {
-    pub area: Vec<Option<AreaSampler>>,
-}
-
-impl EmitterTables {
-    pub fn new(emitters: &[Emitter], shapes: &[Shape]) -> Self {
-        let area = emitters
-            .iter()
-            .map(|e| match e {
-                Emitter::Area { shape, .. } => Some(AreaSampler::new(&shapes[*shape as usize])),
-                _ => None,
-            })
-            .collect();
-        EmitterTables { area }
-    }
 }
 
 impl Scene {

@@ -4,10 +4,11 @@
 use crate::accel::{Accel, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
-use crate::lights::EmitterTables;
+use crate::emitter_tables::EmitterTables;
+use crate::interaction::SurfaceInteraction;
 use crate::medium::{Medium, MediumId};
 use crate::shape::Shape;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use haze_core::Ray;
 use std::path::PathBuf;
 
@@ -25,25 +26,38 @@ pub struct IntegratorSpec {
     pub hide_emitters: bool,
 }
 
+/// Hard cap on the scattering events of one path, whatever `max_depth` says. With
+/// `max_depth -1` and Russian roulette off (`rr_depth` at least this), a path in a closed room
+/// of white walls or albedo-1 fog would never end; it ends here instead, and
+/// [`IntegratorSpec::path_cap_warning`] says so before rendering. Paths this long carry
+/// vanishingly little energy in any scene that absorbs at all.
+pub const MAX_PATH_DEPTH: u32 = 1 << 16;
+
+/// Longest path in scattering events for a `max_depth` setting: unlimited (`-1`) means
+/// [`MAX_PATH_DEPTH`], and nothing is longer than that.
+pub fn depth_limit(max_depth: i32) -> u32 {
+    u32::try_from(max_depth).map_or(MAX_PATH_DEPTH, |d| d.min(MAX_PATH_DEPTH))
+}
+
+impl IntegratorSpec {
+    /// A warning when the settings let a path run to [`MAX_PATH_DEPTH`] without Russian
+    /// roulette: the cap, not the scene, then ends the path.
+    pub fn path_cap_warning(&self) -> Option<String> {
+        let unbounded = self.max_depth < 0 || self.max_depth as u32 > MAX_PATH_DEPTH;
+        (unbounded && self.rr_depth >= MAX_PATH_DEPTH).then(|| {
+            format!(
+                "max_depth {} with rr_depth {} (no Russian roulette): paths are cut at haze's \
+                 hard cap of {MAX_PATH_DEPTH} scattering events",
+                self.max_depth, self.rr_depth
+            )
+        })
+    }
+}
+
 impl Default for IntegratorSpec {
     fn default() -> Self {
         IntegratorSpec { name: "volpath".into(), max_depth: -1, rr_depth: 5, hide_emitters: false }
     }
-}
-
-/// A ray-surface hit.
-#[derive(Clone, Copy, Debug)]
-pub struct SurfaceInteraction {
-    pub t: f32,
-    pub p: Vec3,
-    /// Geometric normal, on the shape's exterior side (flipped with `flip_normals`).
-    pub n: Vec3,
-    /// Shading normal (interpolated vertex normals if the mesh has them, else `n`), on the same
-    /// side as `n`.
-    pub ns: Vec3,
-    pub uv: Vec2,
-    pub shape: u32,
-    pub prim: u32,
 }
 
 pub struct Scene {

@@ -29,6 +29,9 @@ fn every_bad_scene_fails_with_the_expected_message() {
             }
             Err(e) => e.to_string(),
         };
+        if message.contains('\n') {
+            failures.push(format!("{message}\n    is not one line"));
+        }
         if !message.starts_with(&xml.display().to_string()) {
             failures.push(format!("{message}\n    does not start with the file path"));
         }

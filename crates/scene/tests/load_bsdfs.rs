@@ -4,7 +4,7 @@
 use glam::Vec2;
 use haze_core::Rgb;
 use haze_scene::bsdf::MicrofacetType;
-use haze_scene::{load_file, load_str, Bsdf, LoadError, LoadOptions, Scene, Texture};
+use haze_scene::{load_str, Bsdf, LoadError, LoadOptions, Scene, Texture};
 use std::path::Path;
 
 fn load_result(body: &str) -> Result<Scene, LoadError> {
@@ -130,44 +130,4 @@ fn bad_bsdf_and_texture_parameters() {
     assert!(e.contains("does not take a texture 'specular_reflectance'"), "{e}");
     let e = err(r#"<bsdf type="plastic"><rgb name="specular_reflectance" value="0.5"/></bsdf>"#);
     assert!(e.contains("unsupported: 'specular_reflectance' other than 1"), "{e}");
-}
-
-/// The BSDFs of Mitsuba 3's media test scenes that use the new plugins load as the peer
-/// README describes them (ball and pedestal first, in file order).
-#[test]
-fn mitsuba_media_test_scene_bsdfs() {
-    let dir = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/peers/mitsuba3-media-tests/tests/scenes/participating_media"
-    );
-    let load = |name: &str| load_file(&Path::new(dir).join(name), &LoadOptions::default());
-    let s = match load("test_surf_area_light_volpath.xml") {
-        Ok(s) => s,
-        // The scene also needs envmap and moment, which another part of the loader provides.
-        Err(e) if e.message.contains("envmap") || e.message.contains("moment") => return,
-        Err(e) => panic!("{e}"),
-    };
-    let kinds: Vec<&Bsdf> = s.shapes.iter().map(|sh| &sh.bsdf).collect();
-    assert!(kinds.iter().any(|b| matches!(b, Bsdf::Plastic(p) if p.diffuse_reflectance == Texture::Constant(Rgb::new(0.5, 0.3, 0.2)))));
-    assert!(kinds.iter().any(|b| matches!(b, Bsdf::RoughPlastic(_))));
-    assert!(kinds.iter().any(|b| matches!(b, Bsdf::Diffuse { reflectance: Texture::Checkerboard { .. } })));
-    for name in [
-        "test_homo_area_light_volpath.xml",
-        "test_homo_emitter_inside_medium_volpath.xml",
-        "test_homo_obj_inside_medium_volpath.xml",
-        "test_homo_roughdielectric_spot_volpath.xml",
-    ] {
-        let s = load(name).unwrap_or_else(|e| panic!("{e}"));
-        let has = |f: &dyn Fn(&Bsdf) -> bool| s.shapes.iter().any(|sh| f(&sh.bsdf));
-        match name {
-            "test_homo_roughdielectric_spot_volpath.xml" => {
-                assert!(has(
-                    &|b| matches!(b, Bsdf::RoughDielectric(r) if close(r.eta, 1.29964) && r.distr.alpha == 0.3)
-                ))
-            }
-            _ => {
-                assert!(has(&|b| matches!(b, Bsdf::ThinDielectric { eta } if close(*eta, 1.33263))), "{name}")
-            }
-        }
-    }
 }

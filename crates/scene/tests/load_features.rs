@@ -218,26 +218,6 @@ fn includes_and_search_paths() {
     assert!(e.message.contains("recursively"), "{e}");
 }
 
-/// A Mitsuba 3 test scene (includes from a subdirectory, `<path>`, `$integrator` from an
-/// included `<default>`): everything up to its `envmap` is understood.
-#[test]
-fn mitsuba_test_scene_loads_with_envmap_and_moment() {
-    let path = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/peers/mitsuba3-media-tests/tests/scenes/participating_media/\
-         test_homo_spectral_sigmat_volpathmis.xml"
-    ));
-    let s = load_file(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
-    // `moment` wraps `$integrator` = volpathmis with the base file's max_depth.
-    assert_eq!(
-        (s.integrator.name.as_str(), s.integrator.max_depth, s.integrator.rr_depth),
-        ("volpathmis", 6, 5)
-    );
-    assert!(matches!(s.emitters[0], Emitter::EnvMap(_)), "{:?}", s.emitters.len());
-    assert_eq!(s.camera.filter, haze_scene::camera::PixelFilter::Box);
-    assert!((s.camera.fov_x_deg - 34.0221).abs() < 1e-3);
-}
-
 #[test]
 fn spectra_as_wavelength_lists_and_filters() {
     let s = load(

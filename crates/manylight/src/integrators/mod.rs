@@ -1,23 +1,27 @@
 //! The many-light integrators `vrl` and `vpl`: each pass traces its own light paths
 //! ([`crate::lighttrace`]), then every camera ray sums emitted light, single scattering by
 //! next-event estimation ([`crate::single`]) and the contributions of all virtual lights of the
-//! pass (notes §1: `L = emitted + single + sum over virtual lights`, nothing counted twice).
+//! pass (`docs/theory.md` §2: `L = emitted + single + sum over virtual lights`, nothing counted twice).
 
 mod lightcuts;
 mod vpl;
 mod vrl;
 
-pub use lightcuts::{Builder, CutSizeProbe, LightKind, LightcutPass, LightcutSettings, LightcutsIntegrator};
+pub use lightcuts::{
+    Builder, ClusterKind, CutSizeProbe, CutStrategy, LightcutPass, LightcutSettings, LightcutsIntegrator,
+    Vpls, Vrls,
+};
 pub use vpl::VplIntegrator;
 pub use vrl::VrlIntegrator;
 
 use crate::camera::{estimator_medium, CameraSegment};
-use crate::lighttrace::{paths_for_vrl_count, LightTraceSettings};
+use crate::lighttrace::{paths_for_vrl_count, trace_light_paths, LightSet, LightTraceSettings};
 use crate::vrl::VrlMedium;
 use haze_render::integrators::transmittance_to;
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// How many light paths each pass traces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,6 +139,51 @@ pub(crate) fn many_light_radiance(
         }
         out
     })
+}
+
+/// Light paths traced and virtual lights made, over the passes so far (for an integrator's
+/// summary line), and the tracing of one pass's light paths.
+#[derive(Debug)]
+pub(crate) struct PassTracer {
+    paths: u64,
+    lights: AtomicU64,
+    passes: AtomicU64,
+}
+
+impl PassTracer {
+    pub(crate) fn new(paths: u64) -> Self {
+        PassTracer { paths, lights: AtomicU64::new(0), passes: AtomicU64::new(0) }
+    }
+
+    pub(crate) fn paths(&self) -> u64 {
+        self.paths
+    }
+
+    /// The light paths of pass `pass`, counting the pass and its `count(set)` lights.
+    pub(crate) fn trace(
+        &self,
+        scene: &Scene,
+        seed: u64,
+        pass: u32,
+        settings: &LightTraceSettings,
+        count: impl Fn(&LightSet) -> usize,
+    ) -> LightSet {
+        let set = trace_light_paths(scene, self.paths, seed, pass, settings)
+            .expect("emitters were checked when the integrator was made");
+        self.lights.fetch_add(count(&set) as u64, Ordering::Relaxed);
+        self.passes.fetch_add(1, Ordering::Relaxed);
+        set
+    }
+
+    /// `"{paths} light paths and {mean} {what} per pass on average ({passes} passes)"`.
+    pub(crate) fn summary(&self, what: &str) -> String {
+        let passes = self.passes.load(Ordering::Relaxed).max(1);
+        format!(
+            "{} light paths and {:.0} {what} per pass on average ({passes} passes)",
+            self.paths,
+            self.lights.load(Ordering::Relaxed) as f64 / passes as f64,
+        )
+    }
 }
 
 /// Splits light records into the two groups of [`many_light_radiance`].

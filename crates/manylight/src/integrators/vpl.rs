@@ -3,23 +3,21 @@
 
 use super::{
     connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
+    PassTracer,
 };
-use crate::lighttrace::{trace_light_paths, VplRecord};
+use crate::lighttrace::VplRecord;
 use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 pub struct VplIntegrator {
     settings: ManyLightSettings,
-    paths: u64,
     /// `Some(c)`: clamp the VPL geometry term `1/w^2` at `c` (biased; see the estimator).
     pub clamp: Option<f32>,
-    made: AtomicU64,
-    passes: AtomicU64,
+    tracer: PassTracer,
 }
 
 /// The VPLs of one pass in the two groups of `many_light_radiance`.
@@ -36,7 +34,7 @@ impl VplIntegrator {
         clamp: Option<f32>,
     ) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
-        Ok(VplIntegrator { settings, paths, clamp, made: AtomicU64::new(0), passes: AtomicU64::new(0) })
+        Ok(VplIntegrator { settings, clamp, tracer: PassTracer::new(paths) })
     }
 }
 
@@ -48,10 +46,7 @@ impl Integrator for VplIntegrator {
     }
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> VplPass {
-        let set = trace_light_paths(scene, self.paths, seed, pass, &self.settings.trace)
-            .expect("emitters were checked when the integrator was made");
-        self.made.fetch_add(set.vpls.len() as u64, Ordering::Relaxed);
-        self.passes.fetch_add(1, Ordering::Relaxed);
+        let set = self.tracer.trace(scene, seed, pass, &self.settings.trace, |s| s.vpls.len());
         let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
         VplPass { groups, media: media(scene) }
     }
@@ -83,12 +78,9 @@ impl Integrator for VplIntegrator {
     }
 
     fn summary(&self) -> Option<String> {
-        let passes = self.passes.load(Ordering::Relaxed).max(1);
         Some(format!(
-            "vpl: {} light paths and {:.0} VPLs per pass on average ({} passes){}",
-            self.paths,
-            self.made.load(Ordering::Relaxed) as f64 / passes as f64,
-            passes,
+            "vpl: {}{}",
+            self.tracer.summary("VPLs"),
             if self.clamp.is_some() { "; geometry term clamped: the image is biased" } else { "" }
         ))
     }

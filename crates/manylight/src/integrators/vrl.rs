@@ -3,8 +3,9 @@
 
 use super::{
     connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
+    PassTracer,
 };
-use crate::lighttrace::{trace_light_paths, VrlRecord};
+use crate::lighttrace::VrlRecord;
 use crate::vrl::estimator::{contributes, point_pair_estimate, sample_point_pair, PointPair};
 use crate::vrl::{Segment, Vrl, VrlMedium};
 use haze_core::{Ray, Rgb, Sampler};
@@ -15,9 +16,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 pub struct VrlIntegrator {
     settings: ManyLightSettings,
-    paths: u64,
-    made: AtomicU64,
-    passes: AtomicU64,
+    tracer: PassTracer,
     /// Camera segment x VRL evaluations so far (for `haze bench`).
     evaluations: AtomicU64,
 }
@@ -33,17 +32,11 @@ impl VrlIntegrator {
     /// Fails if an emitter cannot start light paths (`constant`).
     pub fn new(scene: &Scene, settings: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
-        Ok(VrlIntegrator {
-            settings,
-            paths,
-            made: AtomicU64::new(0),
-            passes: AtomicU64::new(0),
-            evaluations: AtomicU64::new(0),
-        })
+        Ok(VrlIntegrator { settings, tracer: PassTracer::new(paths), evaluations: AtomicU64::new(0) })
     }
 
     pub fn paths_per_pass(&self) -> u64 {
-        self.paths
+        self.tracer.paths()
     }
 
     /// Camera segment x VRL evaluations made so far (one evaluation includes its visibility test).
@@ -60,10 +53,7 @@ impl Integrator for VrlIntegrator {
     }
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> VrlPass {
-        let set = trace_light_paths(scene, self.paths, seed, pass, &self.settings.trace)
-            .expect("emitters were checked when the integrator was made");
-        self.made.fetch_add(set.vrls.len() as u64, Ordering::Relaxed);
-        self.passes.fetch_add(1, Ordering::Relaxed);
+        let set = self.tracer.trace(scene, seed, pass, &self.settings.trace, |s| s.vrls.len());
         let groups = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
         VrlPass { groups, media: media(scene) }
     }
@@ -84,13 +74,7 @@ impl Integrator for VrlIntegrator {
     }
 
     fn summary(&self) -> Option<String> {
-        let passes = self.passes.load(Ordering::Relaxed).max(1);
-        Some(format!(
-            "vrl: {} light paths and {:.0} VRLs per pass on average ({} passes)",
-            self.paths,
-            self.made.load(Ordering::Relaxed) as f64 / passes as f64,
-            passes
-        ))
+        Some(format!("vrl: {}", self.tracer.summary("VRLs")))
     }
 }
 

@@ -1,4 +1,4 @@
-//! Upper bounds of a light cluster's contribution to a camera segment (notes §3; the paper's
+//! Upper bounds of a light cluster's contribution to a camera segment (`docs/theory.md` §7; the paper's
 //! bound from the seed slides and a strictly conservative variant of ours).
 //!
 //! For a VRL cluster the sampled contribution of any of its VRLs is
@@ -34,20 +34,6 @@ pub enum BoundKind {
     /// ([`inverse_distance_integral`]): grows like `log(1/h)` instead of `1/h` near the camera
     /// line. VPL clusters use the conservative bound.
     Tight,
-}
-
-impl std::str::FromStr for BoundKind {
-    type Err = String;
-
-    /// The names of `--bound`: `paper`, `conservative`, `tight`.
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "paper" => Ok(BoundKind::Paper),
-            "conservative" => Ok(BoundKind::Conservative),
-            "tight" => Ok(BoundKind::Tight),
-            other => Err(format!("the bound must be 'paper', 'conservative' or 'tight', got '{other}'")),
-        }
-    }
 }
 
 /// How `Theta_max` is bounded.
@@ -251,7 +237,7 @@ impl BoundContext {
 /// over an interval of length `l` is largest with the interval centred on `v0`:
 /// `2 (h/s) / h + 2 Int_{h/s}^{l/2} dv / (s v) = (2/s) (1 + ln(l s / (2h)))` when `l s > 2h`,
 /// else `l / h`. This is the sinh sampling's `1/(h p(v)) = (asinh(b/h0) - asinh(a/h0)) / s`
-/// (notes §2) bounded without knowing `h0`: logarithmic in `1/h`, where the paper's `L/h` is
+/// (`docs/theory.md` (T7)) bounded without knowing `h0`: logarithmic in `1/h`, where the paper's `L/h` is
 /// linear. Non-increasing in `s` and `h`, non-decreasing in `l`.
 pub fn inverse_distance_integral(l: f32, s: f32, h: f32) -> f32 {
     if h <= 0.0 {

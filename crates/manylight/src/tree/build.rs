@@ -3,7 +3,7 @@
 //! 1. **Partition by sorting**: Morton codes of the lights' box centres, sorted in parallel, cut
 //!    into groups of at most `group_size` consecutive lights.
 //! 2. **Local agglomerative trees**, one per group in parallel, repeatedly merging the pair with
-//!    the smallest metric `d(A, B) = I(A ∪ B) diag(box(A ∪ B))^2` (notes §5). Pairs are found by
+//!    the smallest metric `d(A, B) = I(A ∪ B) diag(box(A ∪ B))^2` (`docs/theory.md` §9). Pairs are found by
 //!    PLOC's local search (Meister & Bittner 2018): each cluster looks for its best partner among
 //!    `radius` neighbours on each side in Morton order, and mutual best pairs merge.
 //! 3. **Agglomerative top**: the same merging over the groups' roots.
@@ -38,6 +38,7 @@ fn leaf<L: TreeLight>(i: usize, l: &L) -> Node {
         intensity: l.intensity(),
         flux_bound: l.flux_bound(),
         l_max: l.length(),
+        power: l.power(),
         rep: i as u32,
         left: NONE,
         right: NONE,
@@ -66,6 +67,7 @@ fn merge(a: &Node, b: &Node, ia: u32, ib: u32, seed: u64) -> Node {
         intensity: total,
         flux_bound: a.flux_bound + b.flux_bound,
         l_max: a.l_max.max(b.l_max),
+        power: a.power + b.power,
         rep,
         left: ia,
         right: ib,
@@ -108,7 +110,7 @@ impl Cluster {
     }
 }
 
-/// `d(A, B) = I(A ∪ B) diag(box(A ∪ B))^2` (notes §5; Walter et al. 2008's metric with the
+/// `d(A, B) = I(A ∪ B) diag(box(A ∪ B))^2` (`docs/theory.md` §9; Walter et al. 2008's metric with the
 /// paper's intensity), on packed clusters. It only grows when `B` grows (intensity and box both
 /// grow), which is what lets [`ploc`] keep a cluster's best neighbour across iterations.
 #[inline(always)]
@@ -414,6 +416,7 @@ mod tests {
                         intensity: w,
                         flux_bound: Rgb::splat(w),
                         l_max: (q - p).length(),
+                        power: Rgb::splat(w),
                         rep: i as u32,
                         left: NONE,
                         right: NONE,

@@ -1,5 +1,5 @@
 //! Choosing a cut of the light tree for one camera segment (Walter et al. 2005, applied per
-//! camera segment as in Vibert et al. 2019; notes §4).
+//! camera segment as in Vibert et al. 2019; `docs/theory.md` §8).
 //!
 //! Start with the root, estimated by its representative's sampled contribution times
 //! `I_node / I_rep`. Repeatedly replace the node with the largest bound by its two children

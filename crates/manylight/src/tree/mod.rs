@@ -11,7 +11,9 @@ pub mod bound;
 pub mod build;
 pub mod cone;
 pub mod cut;
+pub mod importance;
 pub mod lights;
+pub mod stochastic;
 
 use glam::Vec3;
 use haze_core::Rgb;
@@ -27,6 +29,10 @@ pub trait TreeLight: Sync {
     fn flux_bound(&self) -> Rgb;
     /// Length of the light (0 for points).
     fn length(&self) -> f32;
+    /// The light's power for importance sampling, per channel: `Int_0^L Phi(v) dv` for a VRL
+    /// (flux integrated along its length), the flux for a point light. Positive in every
+    /// channel the light can contribute to.
+    fn power(&self) -> Rgb;
 }
 
 /// Axis-aligned box.
@@ -69,6 +75,8 @@ pub struct Node {
     pub flux_bound: Rgb,
     /// Longest light below (the paper's `L_max`).
     pub l_max: f32,
+    /// Sum of the lights' [`TreeLight::power`], per channel (the stochastic cut's importance).
+    pub power: Rgb,
     /// Representative light (index into the light array).
     pub rep: u32,
     pub left: u32,
@@ -126,8 +134,11 @@ impl LightTree {
                 if !node.bounds.contains(&lb) {
                     return Err(format!("leaf {n}: box does not contain its light"));
                 }
-                if !rel(node.intensity, lights[l].intensity()) || node.l_max != lights[l].length() {
-                    return Err(format!("leaf {n}: intensity or length differs from its light"));
+                if !rel(node.intensity, lights[l].intensity())
+                    || node.l_max != lights[l].length()
+                    || node.power != lights[l].power()
+                {
+                    return Err(format!("leaf {n}: intensity, length or power differs from its light"));
                 }
             } else {
                 let (a, b) = (&self.nodes[node.left as usize], &self.nodes[node.right as usize]);
@@ -143,6 +154,9 @@ impl LightTree {
                 for c in 0..3 {
                     if !rel(node.flux_bound[c], a.flux_bound[c] + b.flux_bound[c]) {
                         return Err(format!("node {n}: flux bound does not sum"));
+                    }
+                    if !rel(node.power[c], a.power[c] + b.power[c]) {
+                        return Err(format!("node {n}: power does not sum"));
                     }
                 }
                 if node.l_max != a.l_max.max(b.l_max) || node.count != a.count + b.count {

@@ -1,5 +1,5 @@
 //! One VPL's contribution to one camera segment, with the camera distance sampled
-//! equiangularly towards the VPL (Kulla & Fajardo 2012; notes §2-3).
+//! equiangularly towards the VPL (Kulla & Fajardo 2012; `docs/theory.md` §5).
 //!
 //! The contribution of VPL `(p, d_in, Phi)` to camera segment `(x, w_c, s)` is
 //!

@@ -1,4 +1,4 @@
-//! One VRL's medium-to-medium contribution to one camera segment (Novak et al. 2012; notes §2),
+//! One VRL's medium-to-medium contribution to one camera segment (Novak et al. 2012; `docs/theory.md` §3-4),
 //! estimated with joint importance sampling: `v` on the VRL `∝ 1/h(v)`, then `u` on the camera
 //! segment equiangularly from `y_v`.
 //!
@@ -54,7 +54,7 @@ pub struct Vrl {
     /// probability `T_hero(v)` (`haze_core::transmittance`): the one-sample MIS weight of that
     /// point is `T_l(v) / mean(ratio T_l(v))`. `Rgb::ZERO` (never a real ratio: the hero's own
     /// is 1) means the segment's length was not sampled and `flux` is simply attenuated,
-    /// `Phi(v) = flux T_l(v)`: the integral of notes §2 as written.
+    /// `Phi(v) = flux T_l(v)`: (T2) of `docs/theory.md` as written.
     pub ratio: Rgb,
     /// Index of the medium the segment lies in (the caller's scene index).
     pub medium: u32,

@@ -1,5 +1,5 @@
 //! Virtual ray lights (Novak et al. 2012): every medium segment of a light path, carrying the
-//! path's flux, lights every camera segment through the medium-to-medium integral of notes §2.
+//! path's flux, lights every camera segment through the medium-to-medium integral of `docs/theory.md` §3.
 //!
 //! - [`Segment`]: a straight piece of a ray (camera segments and VRLs).
 //! - [`sampling`]: the equiangular and `1/h` sampling families with their pdfs.

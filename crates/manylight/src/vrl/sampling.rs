@@ -1,5 +1,5 @@
 //! Sampling a point on a segment so that the `1/w^2` of a point-to-point connection is cancelled
-//! (notes §2): the equiangular family (Kulla & Fajardo 2012, a point on a segment seen from a
+//! (`docs/theory.md` §4): the equiangular family (Kulla & Fajardo 2012, a point on a segment seen from a
 //! point) and the `1/h` family (Novak et al. 2012, a point on a VRL seen from the camera's line).
 //!
 //! Each family comes as `sample_*`, `*_pdf` and `invert_*_sample` (pbrt-v4 style). All pdfs are
@@ -146,7 +146,7 @@ fn subtended_angle(delta: f64, h: f64, a: f64, b: f64) -> f64 {
 // A point on a VRL with density proportional to 1/h(v)
 
 /// Samples `v` in `[0, len]` on a VRL with density `∝ 1/h(v)`, `h(v)` the distance from `y_v`
-/// to the camera's *infinite* line `cam_o + s cam_d` (notes §2). Returns `(v, p(v))`, or `None`
+/// to the camera's *infinite* line `cam_o + s cam_d` (`docs/theory.md` §4.1). Returns `(v, p(v))`, or `None`
 /// for a zero-length VRL. `cam_d` and `vrl.d` must be unit vectors.
 ///
 /// With `t' = v - v_c` measured from the VRL point closest to the camera line, `d` the distance

@@ -1,4 +1,4 @@
-//! Shared by the VRL and VPL estimator tests: adaptive Gauss-Kronrod quadrature (`f64`), an
+//! Shared by the VRL and VPL estimator tests: RGB quadrature (from `haze-testkit`), an
 //! independent `f64` evaluation of the phase function, the Monte Carlo loop with its standard
 //! error, and the pass/fail check with its printed table row.
 #![allow(dead_code)]
@@ -8,91 +8,8 @@ use haze_core::{Phase, Rgb, Sampler, Vec3};
 
 pub type Rgb64 = [f64; 3];
 
-// -- Quadrature --------------------------------------------------------------------------------
-
-#[allow(clippy::excessive_precision)]
-const XK: [f64; 8] = [
-    0.991455371120812639,
-    0.949107912342758525,
-    0.864864423359769073,
-    0.741531185599394440,
-    0.586087235467691130,
-    0.405845151377397167,
-    0.207784955007898468,
-    0.0,
-];
-#[allow(clippy::excessive_precision)]
-const WK: [f64; 8] = [
-    0.022935322010529225,
-    0.063092092629978553,
-    0.104790010322250184,
-    0.140653259715525919,
-    0.169004726639267903,
-    0.190350578064785410,
-    0.204432940075298892,
-    0.209482141084727828,
-];
-#[allow(clippy::excessive_precision)]
-const WG: [f64; 4] = [0.129484966168869693, 0.279705391489276668, 0.381830050505118945, 0.417959183673469388];
-
-/// Gauss-Kronrod 7-15 rule on `[a, b]`: the Kronrod estimate and `|K - G|` (max over channels).
-fn gk15(f: &mut dyn FnMut(f64) -> Rgb64, a: f64, b: f64) -> (Rgb64, f64) {
-    let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
-    let fc = f(c);
-    let mut k = fc.map(|x| WK[7] * x);
-    let mut g = fc.map(|x| WG[3] * x);
-    for i in 0..7 {
-        let (f1, f2) = (f(c - r * XK[i]), f(c + r * XK[i]));
-        for ch in 0..3 {
-            let s = f1[ch] + f2[ch];
-            k[ch] += WK[i] * s;
-            if i % 2 == 1 {
-                g[ch] += WG[i / 2] * s;
-            }
-        }
-    }
-    let err = (0..3).map(|ch| ((k[ch] - g[ch]) * r).abs()).fold(0.0, f64::max);
-    (k.map(|x| x * r), err)
-}
-
-/// Global adaptive quadrature (QUADPACK QAG style) of an RGB integrand over `[a, b]`, first
-/// split at the `breaks` inside it (the peaks of the integrand), until the summed error
-/// estimate is below `rel_tol` times the largest channel of the integral.
-pub fn integrate(mut f: impl FnMut(f64) -> Rgb64, a: f64, b: f64, breaks: &[f64], rel_tol: f64) -> Rgb64 {
-    if b.is_nan() || b <= a {
-        return [0.0; 3];
-    }
-    let mut pts = vec![a, b];
-    pts.extend(breaks.iter().copied().filter(|&x| x > a && x < b));
-    pts.sort_by(f64::total_cmp);
-    pts.dedup();
-    let mut parts: Vec<(f64, f64, Rgb64, f64)> = pts
-        .windows(2)
-        .map(|w| {
-            let (k, e) = gk15(&mut f, w[0], w[1]);
-            (w[0], w[1], k, e)
-        })
-        .collect();
-    for _ in 0..20_000 {
-        let total = sum_parts(&parts);
-        let err: f64 = parts.iter().map(|p| p.3).sum();
-        if err <= rel_tol * total.iter().fold(0.0f64, |m, x| m.max(x.abs())) || err == 0.0 {
-            break;
-        }
-        let i = (0..parts.len()).max_by(|&i, &j| parts[i].3.total_cmp(&parts[j].3)).unwrap();
-        let (lo, hi, _, _) = parts.swap_remove(i);
-        let mid = 0.5 * (lo + hi);
-        for (x, y) in [(lo, mid), (mid, hi)] {
-            let (k, e) = gk15(&mut f, x, y);
-            parts.push((x, y, k, e));
-        }
-    }
-    sum_parts(&parts)
-}
-
-fn sum_parts(parts: &[(f64, f64, Rgb64, f64)]) -> Rgb64 {
-    std::array::from_fn(|ch| parts.iter().map(|p| p.2[ch]).sum())
-}
+/// Adaptive Gauss-Kronrod quadrature of an RGB integrand.
+pub use haze_testkit::quadrature::integrate_channels as integrate;
 
 // -- Independent f64 physics ------------------------------------------------------------------
 
@@ -211,4 +128,39 @@ pub fn table_header() -> String {
         "samples",
         "-".repeat(92)
     )
+}
+
+// -- Shared test scaffolding ------------------------------------------------------------------
+
+/// A random camera segment for the degenerate-configuration tests: origin in `[-2, 2]^3`,
+/// uniform direction, length at a random scale (`1e-4`, 1 or 100), zero for every 11th `i`.
+/// Returns the segment and its scale.
+pub fn degenerate_camera_segment(s: &mut Sampler, i: u32) -> (haze_manylight::vrl::Segment, f32) {
+    let c = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+    let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - Vec3::splat(2.0);
+    let scale = [1e-4f32, 1.0, 100.0][(s.next_u32() % 3) as usize];
+    let len = if i % 11 == 0 { 0.0 } else { scale * (0.01 + 2.0 * s.next_1d()) };
+    (haze_manylight::vrl::Segment::new(o, c, len), scale)
+}
+
+/// Prints the rows of a negative-control run under `title` and checks that every `must_pass`
+/// row passed and every `must_fail` group failed (named in its message).
+pub fn report_controls(title: &str, must_pass: &[(bool, String)], must_fail: &[(&[(bool, String)], &str)]) {
+    println!("\n{title}:\n{}", table_header());
+    for (_, row) in must_pass.iter().chain(must_fail.iter().flat_map(|(rows, _)| rows.iter())) {
+        println!("{row}");
+    }
+    assert!(must_pass.iter().all(|r| r.0), "the manual estimator with the right pdf must pass");
+    for (rows, what) in must_fail {
+        assert!(rows.iter().all(|r| !r.0), "the check failed to detect {what}");
+    }
+}
+
+/// Prints `rows` as a table under `title` and checks that every row passed.
+pub fn report_rows(title: &str, rows: &[(bool, String)], failure: &str) {
+    println!("\n{title}\n{}", table_header());
+    for (_, row) in rows {
+        println!("{row}");
+    }
+    assert!(rows.iter().all(|r| r.0), "{failure}");
 }

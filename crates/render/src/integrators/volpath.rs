@@ -61,7 +61,8 @@ impl Integrator for VolPath {
         sampler: &mut Sampler,
     ) -> PathRadiance {
         let mut out = PathRadiance::default();
-        let max_depth = if self.max_depth < 0 { u32::MAX } else { self.max_depth as u32 };
+        // `-1` (unlimited) and anything longer stop at the hard cap, `MAX_PATH_DEPTH`.
+        let max_depth = haze_scene::depth_limit(self.max_depth);
         // Throughput f/p_hero and the pdf ratios r_c = p_c/p_hero of the path so far.
         let mut beta = Rgb::ONE;
         let mut r = Rgb::ONE;

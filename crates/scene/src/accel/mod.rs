@@ -2,20 +2,54 @@
 //! (`obvhs`' compressed wide BVH, chosen by measurement: see `tools/bvh-candidates/README.md`),
 //! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
 //! have few of them).
+//!
+//! A watertight triangle test is not enough for a watertight traversal (issue 16, "the leak":
+//! paths escaped closed cube rooms). Two things in the BVH lost hits, and both are handled here
+//! rather than in obvhs:
+//! - obvhs's ray-box test is not conservative: its slab distances carry rounding error, and a
+//!   face of an axis-aligned mesh has a flat box (zero thickness), so a ray through an edge
+//!   shared by two flat boxes could miss both. Every triangle's box is therefore padded by
+//!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
+//!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions).
+//! - obvhs clamps the entry distance of every box to `1e-4` (`cwbvh::node::EPSILON`; the ray's
+//!   `tmin` is not used), so a box the ray leaves before `t = 1e-4` is skipped: a wall just in
+//!   front of a point in a medium, or the adjacent wall at a corner. The traversal ray therefore
+//!   starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from the real
+//!   origin) report their distances in that shifted parametrisation.
+//!
+//! Coordinates whose magnitude obvhs's quantised node boxes cannot represent are refused when
+//! the scene is built ([`MAX_COORDINATE`]).
 
 mod watertight;
 
 pub use watertight::{TriSoa, WatertightRay};
 
-use crate::scene::SurfaceInteraction;
+use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
 use crate::shape::{Geometry, Shape};
 use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
-use obvhs::cwbvh::{builder::build_cwbvh_from_tris, CwBvh};
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
 use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
+
+/// Every triangle's BVH box grows by this times the largest coordinate magnitude in the scene,
+/// on every side (see the module documentation). About 34 ulps: cheap in overlap, far more than
+/// the rounding error of a slab test.
+const BOX_PAD: f32 = 2e-6;
+
+/// The traversal ray starts this far (in units of `t`; directions are unit length) behind the
+/// real origin, twice obvhs's fixed box `tmin` of `1e-4`.
+const ORIGIN_BACKOFF: f32 = 2e-4;
+
+/// Largest coordinate magnitude of scene geometry haze accepts. obvhs stores node boxes as an
+/// origin plus power-of-two extents in an 8-bit exponent; extents beyond about `2^100` overflow
+/// it (a cube scaled by `1e30` panicked inside obvhs). The watertight triangle test multiplies
+/// three coordinate differences, which overflows f32 beyond about `7e12`; rays then pass
+/// through walls. `1e12` keeps every product finite for rays within the scene.
+pub const MAX_COORDINATE: f32 = 1e12;
 
 /// A triangle in BVH leaf order with the shape and primitive it came from.
 #[derive(Clone, Copy, Debug)]
@@ -57,6 +91,38 @@ pub enum ShadowQuery {
 enum Analytic {
     Sphere { shape: u32, center: Vec3, radius: f32, flip: bool },
     Disk { shape: u32, to_world: Mat4, inv: Mat4, normal: Vec3 },
+}
+
+/// Triangle hits closer than this to the ray origin are ignored. Rays leaving a surface start
+/// at an offset origin (`haze_core::ray::offset_origin`), so this only has to exclude hits at
+/// the origin itself.
+const T_MIN: f32 = 0.0;
+
+/// A distance `t` from the real origin as a distance along the traversal ray, rounded up so
+/// that obvhs never prunes a box that holds a hit at `t`.
+fn shifted(t: f32) -> f32 {
+    (t + ORIGIN_BACKOFF) * (1.0 + 4.0 * f32::EPSILON)
+}
+
+/// How far [`pull_inside`] moves a hit point, relative to its largest coordinate (about 30 f32
+/// spacings).
+const PULL_INSIDE: f32 = 4e-6;
+
+/// Moves a hit point `p` on triangle `v` towards the triangle's centroid by about
+/// `PULL_INSIDE (1 + |p|)` (at most half way). A hit at an edge, rounded, can lie on or past
+/// the plane of the adjacent face; offset along its own normal only
+/// ([`haze_core::ray::offset_origin`]) it would then start the next ray on or outside that face,
+/// and at the inside corner of a closed room the ray leaves the room. Pulled inside its own
+/// triangle, the point is clear of every other face's plane by many spacings.
+fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
+    let to_centroid = (v[0] + v[1] + v[2]) / 3.0 - p;
+    let len = to_centroid.length();
+    let step = PULL_INSIDE * (1.0 + p.abs().max_element());
+    if len > 0.0 && len.is_finite() {
+        p + to_centroid * (step / len).min(0.5)
+    } else {
+        p
+    }
 }
 
 pub struct Accel {
@@ -133,7 +199,19 @@ impl Accel {
         let (bvh, tris) = if flat.is_empty() {
             (None, Vec::new())
         } else {
-            let bvh = build_cwbvh_from_tris(&flat, build_params(flat.len()), &mut Default::default());
+            let magnitude = flat
+                .iter()
+                .map(|t| t.v0.abs().max(t.v1.abs()).max(t.v2.abs()).max_element())
+                .fold(0.0f32, f32::max);
+            let pad = Vec3A::splat(BOX_PAD * magnitude + f32::MIN_POSITIVE);
+            let boxes: Vec<Aabb> = flat
+                .iter()
+                .map(|t| {
+                    let b = t.aabb();
+                    Aabb::new(b.min - pad, b.max + pad)
+                })
+                .collect();
+            let bvh = build_cwbvh(&boxes, build_params(flat.len()), &mut Default::default());
             let tris = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
             (Some(bvh), tris)
         };
@@ -153,25 +231,24 @@ impl Accel {
             // Prepared on the first triangle test: most connection and shadow rays in media
             // test no triangle at all, only node boxes.
             let mut wt: Option<WatertightRay> = None;
-            let r = BvhRay::new(o, d, 0.0, t_max);
+            // The closest hit so far, kept here in the real parametrisation; obvhs only sees
+            // the shifted distances, for pruning.
+            let mut closest: Option<(usize, f32, f32, f32)> = None;
+            let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(t_max));
             let mut hit = RayHit::none();
-            // Every hit the test reports is below the traversal's current `tmax`, so it becomes
-            // the closest hit: keep its barycentrics rather than testing the winner again.
-            let mut bary = (0.0, 0.0);
-            let found = bvh.ray_traverse(r, &mut hit, |r, i| {
+            bvh.ray_traverse(r, &mut hit, |_, i| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                match wt.intersect_soa(&self.tris[i].v, 1e-7, r.tmax) {
+                match wt.intersect_soa(&self.tris[i].v, T_MIN, t_max) {
                     Some((t, b1, b2)) => {
-                        bary = (b1, b2);
-                        t
+                        t_max = t;
+                        closest = Some((i, t, b1, b2));
+                        shifted(t)
                     }
                     None => f32::INFINITY,
                 }
             });
-            if found {
-                let tri = &self.tris[hit.primitive_id as usize];
-                t_max = hit.t;
-                best = Some(self.triangle_interaction(shapes, tri, hit.t, bary.0, bary.1));
+            if let Some((i, t, b1, b2)) = closest {
+                best = Some(self.triangle_interaction(shapes, &self.tris[i], t, b1, b2));
             }
         }
         for a in &self.analytic {
@@ -226,7 +303,7 @@ impl Accel {
         let b0 = 1.0 - b1 - b2;
         let [v0, v1, v2] = [0, 1, 2].map(|i| Vec3::from(tri.v.vertex(i)));
         // Barycentric interpolation is more precise than o + t d far from the origin.
-        let p = v0 * b0 + v1 * b1 + v2 * b2;
+        let p = pull_inside(v0 * b0 + v1 * b1 + v2 * b2, [v0, v1, v2]);
         let n = m.face_normal(tri.prim as usize);
         let idx = m.indices[tri.prim as usize].map(|i| i as usize);
         let ns = match &m.normals {
@@ -253,12 +330,19 @@ impl Accel {
             let o: Vec3A = ray.o.into();
             let d: Vec3A = ray.d.into();
             let mut wt: Option<WatertightRay> = None;
-            let r = BvhRay::new(o, d, 0.0, ray.t_max);
-            let missed = bvh.ray_traverse_miss(r, |r, i| {
+            let mut blocked = false;
+            let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
+            bvh.ray_traverse_miss(r, |_, i| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                wt.intersect_soa(&self.tris[i].v, 1e-7, r.tmax).map_or(f32::INFINITY, |h| h.0)
+                if wt.intersect_soa(&self.tris[i].v, T_MIN, ray.t_max).is_some() {
+                    blocked = true;
+                    // Below any tmax: obvhs stops at the first hit.
+                    f32::NEG_INFINITY
+                } else {
+                    f32::INFINITY
+                }
             });
-            if !missed {
+            if blocked {
                 return true;
             }
         }
@@ -299,26 +383,28 @@ impl Accel {
         let d: Vec3A = ray.d.into();
         let mut wt: Option<WatertightRay> = None;
         let (mut n, mut overflow) = (0usize, false);
-        let r = BvhRay::new(o, d, 0.0, ray.t_max);
-        let missed = bvh.ray_traverse_miss(r, |r, i| {
+        let mut blocked = false;
+        // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
+        // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
+        let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
+        bvh.ray_traverse_miss(r, |_, i| {
             let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
             let tri = &self.tris[i];
-            let Some((t, b1, b2)) = wt.intersect_soa(&tri.v, 1e-7, r.tmax) else { return f32::INFINITY };
-            if tri.blocks {
-                return t;
-            }
-            if n == MAX_SHADOW_HITS {
-                overflow = true;
-                return t;
+            let Some((t, b1, b2)) = wt.intersect_soa(&tri.v, T_MIN, ray.t_max) else { return f32::INFINITY };
+            if tri.blocks || n == MAX_SHADOW_HITS {
+                overflow = !tri.blocks;
+                blocked = true;
+                // Below any tmax: obvhs stops at the first hit.
+                return f32::NEG_INFINITY;
             }
             hits[n] = ShadowHit { t, tri: i as u32, b1, b2 };
             n += 1;
             f32::INFINITY
         });
-        match (missed, overflow) {
-            (true, _) => ShadowQuery::Clear(n),
-            (false, false) => ShadowQuery::Blocked,
-            (false, true) => ShadowQuery::Unsupported,
+        match (blocked, overflow) {
+            (false, _) => ShadowQuery::Clear(n),
+            (true, false) => ShadowQuery::Blocked,
+            (true, true) => ShadowQuery::Unsupported,
         }
     }
 
@@ -389,6 +475,25 @@ mod tests {
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
             let h = accel.intersect(&shapes, &Ray::new(Vec3::ZERO, d)).expect("ray leaked out of the cube");
             assert!(h.n.dot(d) > 0.0);
+        }
+    }
+
+    /// Geometry up to `MAX_COORDINATE` builds (obvhs panicked on a cube scaled by 1e30, which
+    /// the loader now refuses) and rays from inside still find the walls.
+    #[test]
+    fn huge_coordinates_up_to_the_limit_build_and_hold() {
+        for scale in [1e-6f32, 1.0, 1e10, MAX_COORDINATE] {
+            let m = Mat4::from_scale(Vec3::splat(scale));
+            let shapes = vec![shape(Geometry::Mesh(cube_mesh(&m, false)))];
+            let accel = Accel::build(&shapes);
+            let mut s = Sampler::from_seed(3);
+            for _ in 0..2000 {
+                let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+                let h = accel
+                    .intersect(&shapes, &Ray::new(Vec3::ZERO, d))
+                    .unwrap_or_else(|| panic!("{scale}: leaked along {d}"));
+                assert!((h.t / scale - 1.0) > -1e-3 && h.t / scale < 1.8, "{scale}: t = {}", h.t);
+            }
         }
     }
 

@@ -146,6 +146,9 @@ fn microfacet(p: &Params) -> Result<Microfacet, LoadError> {
     if alpha.is_nan() || alpha <= 0.0 {
         return Err(p.error_at("alpha", format!("'alpha' must be > 0, got {alpha}")));
     }
+    if alpha > MAX_ALPHA {
+        return Err(p.error_at("alpha", format!("'alpha' must be at most {MAX_ALPHA}, got {alpha}")));
+    }
     let sample_visible = p.bool("sample_visible", true)?;
     Ok(Microfacet::new(ty, alpha, sample_visible))
 }
@@ -168,8 +171,23 @@ fn ior(p: &Params, name: &str, default: &str) -> Result<f32, LoadError> {
     if value <= 0.0 {
         return Err(p.error_at(name, format!("'{name}' must be > 0, got {value}")));
     }
+    // Far outside this range the Fresnel terms overflow or cancel to NaN (int_ior 1e-30 made
+    // every sample NaN); no real material comes near it.
+    if !(MIN_IOR..=MAX_IOR).contains(&value) {
+        return Err(p.error_at(
+            name,
+            format!("'{name}' must lie in [{MIN_IOR}, {MAX_IOR}] (haze's range for indices of refraction), got {value}"),
+        ));
+    }
     Ok(value)
 }
+
+/// The range of indices of refraction haze accepts.
+const MIN_IOR: f32 = 0.01;
+const MAX_IOR: f32 = 100.0;
+
+/// Largest microfacet `alpha` haze accepts (beyond it the distributions overflow).
+const MAX_ALPHA: f32 = 100.0;
 
 #[cfg(test)]
 mod tests {

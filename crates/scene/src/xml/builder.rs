@@ -1,63 +1,19 @@
 //! Walks the `<scene>` element and assembles the [`Scene`]: ids and references, the one
 //! sensor and integrator, and the lists of shapes, media and emitters.
 
+use super::context::Builder;
 use super::document::{Document, Element};
-use super::params::{Ids, Params, VALUE_TAGS};
+use super::params::{Ids, VALUE_TAGS};
 use super::{bsdfs, emitters, integrator, media, plugins, sensor, shapes, textures, LoadError};
 use crate::camera::Camera;
-use crate::emitter::Emitter;
-use crate::medium::{Medium, MediumId};
 use crate::scene::{IntegratorSpec, Scene};
-use crate::shape::Shape;
-use std::collections::HashMap;
 use std::path::Path;
-
-/// The scene under construction. Plugins that create objects other plugins refer to (media,
-/// area emitters) add them here.
-pub(super) struct Builder<'a> {
-    pub doc: &'a Document,
-    pub ids: &'a Ids<'a>,
-    pub shapes: Vec<Shape>,
-    pub media: Vec<Medium>,
-    pub emitters: Vec<Emitter>,
-    /// Media already built, by element: a medium referenced from several shapes is one medium.
-    media_by_element: HashMap<usize, MediumId>,
-}
-
-impl<'a> Builder<'a> {
-    pub fn params(&self, el: &'a Element) -> Result<Params<'a>, LoadError> {
-        Params::new(el, self.ids)
-    }
-
-    /// The medium defined by `el`, built on first use.
-    pub fn medium(&mut self, el: &'a Element) -> Result<MediumId, LoadError> {
-        if let Some(&id) = self.media_by_element.get(&el.uid) {
-            return Ok(id);
-        }
-        let name = match el.attr("id") {
-            Some(id) => id.to_string(),
-            None => format!("medium{}", self.media.len()),
-        };
-        let medium = media::build(&self.params(el)?, name)?;
-        let id = self.media.len() as MediumId;
-        self.media.push(medium);
-        self.media_by_element.insert(el.uid, id);
-        Ok(id)
-    }
-}
 
 /// Builds the scene from a parsed document; `file` names the scene in [`Scene::path`].
 pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
     let mut ids = Ids::new();
     collect_ids(&doc.root, &mut ids)?;
-    let mut b = Builder {
-        doc,
-        ids: &ids,
-        shapes: Vec::new(),
-        media: Vec::new(),
-        emitters: Vec::new(),
-        media_by_element: HashMap::new(),
-    };
+    let mut b = Builder::new(doc, &ids);
     let mut camera: Option<(Camera, u32, &Element)> = None;
     let mut integrator: Option<(IntegratorSpec, &Element)> = None;
     for el in &doc.root.children {

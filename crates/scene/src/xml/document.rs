@@ -133,13 +133,14 @@ pub(super) fn parse(
     };
     let source = Rc::new(Source { file: file_name.to_path_buf(), dir: base_dir.to_path_buf() });
     let doc = parse_xml(xml, &source.file)?;
+    let lines = LineIndex::new(xml);
     let root = doc.root_element();
-    let mut scene = ctx.element_shell(&doc, root, &source)?;
+    let mut scene = ctx.element_shell(&lines, root, &source)?;
     if scene.tag != "scene" {
         return Err(scene.error("the root element must be <scene>"));
     }
     check_version(&scene)?;
-    ctx.fill(&doc, root, &source, true, &mut scene)?;
+    ctx.fill(&lines, root, &source, true, 1, &mut scene)?;
     Ok(Document { root: scene, search_dirs: ctx.search_dirs, files: RefCell::new(ctx.files) })
 }
 
@@ -161,19 +162,63 @@ fn check_version(scene: &Element) -> Result<(), LoadError> {
 
 fn parse_xml<'x>(xml: &'x str, file: &Path) -> Result<roxmltree::Document<'x>, LoadError> {
     roxmltree::Document::parse(xml).map_err(|e| {
-        let pos = e.pos();
-        LoadError {
-            file: file.to_path_buf(),
-            line: pos.row,
-            column: pos.col,
-            element: String::new(),
-            message: format!("malformed XML: {e}"),
-        }
+        use roxmltree::Error as E;
+        let (line, column, message) = match e {
+            // roxmltree places these at 1:1; they are about where the text ends.
+            E::UnexpectedEndOfStream | E::UnclosedRootNode => {
+                let (line, column) = LineIndex::new(xml).position(xml.len());
+                (line, column, format!("malformed XML: the file ends early ({e})"))
+            }
+            _ => (e.pos().row, e.pos().col, format!("malformed XML: {e}")),
+        };
+        LoadError { file: file.to_path_buf(), line, column, element: String::new(), message }
     })
 }
 
+/// Byte offsets of line starts, for 1-based (line, column) of any offset in `O(log n)`.
+/// (`roxmltree::Document::text_pos_at` scans from the start of the text on every call, which
+/// made loading quadratic in the number of elements.)
+struct LineIndex<'x> {
+    text: &'x str,
+    starts: Vec<usize>,
+    /// The last answer `(byte offset, line, 0-based column)`: elements are looked up in file
+    /// order, so the column of the next one on the same (possibly very long) line is counted
+    /// from there rather than from the start of the line.
+    last: std::cell::Cell<(usize, usize, usize)>,
+}
+
+impl<'x> LineIndex<'x> {
+    fn new(text: &'x str) -> Self {
+        let starts = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
+        LineIndex { text, starts, last: std::cell::Cell::new((0, 1, 0)) }
+    }
+
+    /// Line and column (in characters, as roxmltree counts them) of byte offset `pos`.
+    fn position(&self, pos: usize) -> (u32, u32) {
+        let pos = pos.min(self.text.len());
+        let line = self.starts.partition_point(|&s| s <= pos).max(1);
+        let (last_pos, last_line, last_col) = self.last.get();
+        let (from, col) = if last_line == line && last_pos <= pos {
+            (last_pos, last_col)
+        } else {
+            (self.starts[line - 1], 0)
+        };
+        let column = col + self.text.get(from..pos).map_or(pos - from, |t| t.chars().count());
+        self.last.set((pos, line, column));
+        (u32::try_from(line).unwrap_or(u32::MAX), u32::try_from(column + 1).unwrap_or(u32::MAX))
+    }
+}
+
+/// Elements nest at most this deep (Mitsuba scenes nest a handful of levels; very deep
+/// nesting would exhaust the stack of the recursive loader).
+pub(super) const MAX_NESTING_DEPTH: usize = 64;
+
+/// A value may not grow beyond this many bytes through `$name` substitution (a chain of
+/// `<default>`s, each repeating the previous one, grows exponentially).
+pub(super) const MAX_SUBSTITUTED_LEN: usize = 1 << 20;
+
 /// Includes nest at most this deep (a file including itself would recurse forever).
-const MAX_INCLUDE_DEPTH: usize = 16;
+pub(super) const MAX_INCLUDE_DEPTH: usize = 16;
 
 struct Context {
     /// Values for `$name`: `-D` defines and the `<default>`s seen so far. The first value
@@ -191,19 +236,19 @@ impl Context {
     /// Converts `node` without its children, substituting `$name` in its attributes.
     fn element_shell(
         &mut self,
-        doc: &roxmltree::Document,
+        lines: &LineIndex,
         node: roxmltree::Node,
         source: &Rc<Source>,
     ) -> Result<Element, LoadError> {
-        let pos = doc.text_pos_at(node.range().start);
+        let (line, column) = lines.position(node.range().start);
         let mut el = Element {
             uid: self.next_uid,
             tag: node.tag_name().name().to_string(),
             attrs: Vec::new(),
             children: Vec::new(),
             source: source.clone(),
-            line: pos.row,
-            column: pos.col,
+            line,
+            column,
         };
         self.next_uid += 1;
         // Attributes are first kept raw so that an error while substituting can still
@@ -225,10 +270,11 @@ impl Context {
     /// (`top_level`), `<default>` elements are consumed.
     fn fill(
         &mut self,
-        doc: &roxmltree::Document,
+        lines: &LineIndex,
         node: roxmltree::Node,
         source: &Rc<Source>,
         top_level: bool,
+        depth: usize,
         parent: &mut Element,
     ) -> Result<(), LoadError> {
         for child in node.children() {
@@ -242,7 +288,12 @@ impl Context {
             if !child.is_element() {
                 continue; // comments, processing instructions
             }
-            let mut el = self.element_shell(doc, child, source)?;
+            let mut el = self.element_shell(lines, child, source)?;
+            if depth >= MAX_NESTING_DEPTH {
+                return Err(
+                    el.error(format!("elements nest too deeply (the limit is {MAX_NESTING_DEPTH} levels)"))
+                );
+            }
             match el.tag.as_str() {
                 "default" => {
                     if !top_level {
@@ -253,7 +304,7 @@ impl Context {
                         return Err(el.error("<default> takes no children"));
                     }
                 }
-                "include" => self.include(&el, top_level, parent)?,
+                "include" => self.include(&el, top_level, depth, parent)?,
                 "path" => {
                     if !top_level {
                         return Err(el.error("<path> must be a direct child of <scene>"));
@@ -263,7 +314,7 @@ impl Context {
                     self.search_dirs.push(dir);
                 }
                 _ => {
-                    self.fill(doc, child, source, false, &mut el)?;
+                    self.fill(lines, child, source, false, depth + 1, &mut el)?;
                     parent.children.push(el);
                 }
             }
@@ -284,12 +335,24 @@ impl Context {
 
     /// `<include filename=".."/>`: a file whose root is `<scene>` contributes its children (at
     /// the top level its `<default>`s too); any other root element is inserted as it is.
-    fn include(&mut self, el: &Element, top_level: bool, parent: &mut Element) -> Result<(), LoadError> {
+    fn include(
+        &mut self,
+        el: &Element,
+        top_level: bool,
+        depth: usize,
+        parent: &mut Element,
+    ) -> Result<(), LoadError> {
         el.check_attrs(&["filename"])?;
         let name = el.required_attr("filename")?;
         let path = resolve_in(&self.search_dirs, name, el);
-        if self.include_stack.len() >= MAX_INCLUDE_DEPTH || self.include_stack.contains(&path) {
+        if self.include_stack.contains(&path) {
             return Err(el.error(format!("'{}' is included recursively", path.display())));
+        }
+        if self.include_stack.len() >= MAX_INCLUDE_DEPTH {
+            return Err(el.error(format!(
+                "include depth limit ({MAX_INCLUDE_DEPTH}) reached: cannot include '{}'",
+                path.display()
+            )));
         }
         let xml = std::fs::read_to_string(&path)
             .map_err(|e| el.error(format!("cannot read '{}': {e}", path.display())))?;
@@ -299,13 +362,14 @@ impl Context {
             dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
         });
         let doc = parse_xml(&xml, &path)?;
+        let lines = LineIndex::new(&xml);
         let root = doc.root_element();
         self.include_stack.push(path);
-        let mut root_el = self.element_shell(&doc, root, &source)?;
+        let mut root_el = self.element_shell(&lines, root, &source)?;
         let result = if root_el.tag == "scene" {
-            check_version(&root_el).and_then(|()| self.fill(&doc, root, &source, top_level, parent))
+            check_version(&root_el).and_then(|()| self.fill(&lines, root, &source, top_level, depth, parent))
         } else {
-            self.fill(&doc, root, &source, false, &mut root_el).map(|()| {
+            self.fill(&lines, root, &source, false, depth + 1, &mut root_el).map(|()| {
                 parent.children.push(root_el);
             })
         };
@@ -334,6 +398,12 @@ fn substitute(value: &str, params: &HashMap<String, String>) -> Result<String, S
             return Err("'$' must be followed by a parameter name".into());
         }
         match params.get(name) {
+            Some(v) if out.len() + v.len() > MAX_SUBSTITUTED_LEN.max(value.len()) => {
+                return Err(format!(
+                    "substituting '${name}' makes the value longer than {MAX_SUBSTITUTED_LEN} bytes \
+                     (<default> values that repeat each other grow exponentially)"
+                ))
+            }
             Some(v) => out.push_str(v),
             None => {
                 return Err(format!(

@@ -40,6 +40,14 @@ pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
         }
         "spot" => {
             let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+            // The spot maps directions back to its local frame through the inverse.
+            let linear = glam::Mat3::from_mat4(to_world);
+            let scale = linear.x_axis.abs().max(linear.y_axis.abs()).max(linear.z_axis.abs()).max_element();
+            let inverse_ok =
+                linear.determinant().abs() > 1e-9 * scale * scale * scale && to_world.inverse().is_finite();
+            if !inverse_ok {
+                return Err(p.error_at("to_world", "the spot's to_world is singular (it has no inverse)"));
+            }
             let intensity = non_negative(p, "intensity")?;
             let cutoff = p.float("cutoff_angle", 20.0)?;
             if !(cutoff > 0.0 && cutoff < 180.0) {
@@ -95,11 +103,18 @@ pub(super) fn area_radiance(p: &Params) -> Result<Rgb, LoadError> {
     Ok(radiance)
 }
 
-/// A spectrum parameter defaulting to 1 that must not be negative.
+/// A spectrum parameter defaulting to 1 that must not be negative (nor so large that the
+/// estimates built on it overflow).
 fn non_negative(p: &Params, name: &str) -> Result<Rgb, LoadError> {
     let v = p.spectrum(name, Rgb::ONE)?;
     if v.min_component() < 0.0 {
         return Err(p.error_at(name, format!("'{name}' must not be negative")));
+    }
+    if v.max_component() > super::MAX_MAGNITUDE {
+        return Err(p.error_at(
+            name,
+            format!("'{name}' must be at most {:e}, got {:e}", super::MAX_MAGNITUDE, v.max_component()),
+        ));
     }
     Ok(v)
 }

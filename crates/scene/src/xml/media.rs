@@ -39,7 +39,18 @@ pub(super) fn build(p: &Params, name: String) -> Result<Medium, LoadError> {
         None => Phase::Isotropic,
     };
     p.finish()?;
-    Ok(Medium { name, sigma_t: sigma_t.map(|s| s * scale), albedo, phase })
+    let sigma_t = sigma_t.map(|s| s * scale);
+    if sigma_t.max_component() > super::MAX_MAGNITUDE {
+        return Err(p.error_at(
+            "sigma_t",
+            format!(
+                "'sigma_t' (times 'scale') must be at most {:e}, got {:e}: distances times it overflow",
+                super::MAX_MAGNITUDE,
+                sigma_t.max_component()
+            ),
+        ));
+    }
+    Ok(Medium { name, sigma_t, albedo, phase })
 }
 
 /// `isotropic`, or `hg` with asymmetry `g` (Mitsuba 3 default 0.8) in (-1, 1).

@@ -17,6 +17,7 @@
 
 mod bsdfs;
 mod builder;
+mod context;
 mod document;
 mod emitters;
 mod integrator;
@@ -29,6 +30,7 @@ mod sensor;
 mod shapes;
 mod textures;
 mod transform;
+mod values;
 
 pub use bsdfs::{ior_by_name, NAMED_IORS};
 pub use plugins::supported_plugins;
@@ -36,6 +38,11 @@ pub use plugins::supported_plugins;
 use crate::scene::Scene;
 use std::fmt;
 use std::path::{Path, PathBuf};
+
+/// Largest emitter value (radiance, intensity) and extinction coefficient haze accepts: far
+/// above any physical scene, far below where products of them overflow f32 (`3.4e38`) and
+/// every sample turns NaN.
+pub(crate) const MAX_MAGNITUDE: f32 = 1e20;
 
 /// Options that come from outside the file.
 #[derive(Clone, Debug, Default)]
@@ -73,9 +80,63 @@ impl fmt::Display for LoadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}:{}: ", self.file.display(), self.line, self.column)?;
         if !self.element.is_empty() {
-            write!(f, "{}: ", self.element)?;
+            write!(f, "{}: ", one_line(&shorten_long_words(&self.element)))?;
         }
-        f.write_str(&self.message)
+        f.write_str(&one_line(&shorten_long_words(&self.message)))
+    }
+}
+
+/// Messages quote text from the file, which may span lines: shown on one line.
+fn one_line(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains(['\n', '\r']) {
+        s.split(['\n', '\r']).map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" ").into()
+    } else {
+        s.into()
+    }
+}
+
+/// Longest run of non-blank characters a message shows whole.
+const MAX_WORD_CHARS: usize = 120;
+
+/// Shortens every run of non-blank characters longer than [`MAX_WORD_CHARS`] to its start and
+/// its length: messages quote attribute values, which a broken or hostile file can make
+/// megabytes long.
+fn shorten_long_words(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.len() <= MAX_WORD_CHARS {
+        return s.into();
+    }
+    let mut out = String::with_capacity(s.len().min(16 * MAX_WORD_CHARS));
+    let mut shortened = false;
+    for (i, word) in s.split(' ').enumerate() {
+        if out.len() > 16 * MAX_WORD_CHARS {
+            shortened = true;
+            break;
+        }
+        if i > 0 {
+            out.push(' ');
+        }
+        match word.char_indices().nth(MAX_WORD_CHARS) {
+            Some((cut, _)) => {
+                let keep = word.char_indices().nth(MAX_WORD_CHARS / 2).map_or(cut, |(i, _)| i);
+                out.push_str(&word[..keep]);
+                out.push_str(&format!("[... {} bytes in all]", word.len()));
+                shortened = true;
+            }
+            None => out.push_str(word),
+        }
+    }
+    // Many short words (a long list of numbers) are cut as a whole.
+    if out.len() > 8 * MAX_WORD_CHARS {
+        let keep = out.char_indices().nth(4 * MAX_WORD_CHARS).map_or(out.len(), |(i, _)| i);
+        let total = s.len();
+        out.truncate(keep);
+        out.push_str(&format!("[... {total} bytes in all]"));
+        shortened = true;
+    }
+    if shortened {
+        out.into()
+    } else {
+        s.into()
     }
 }
 

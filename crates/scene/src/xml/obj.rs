@@ -2,7 +2,6 @@
 
 use crate::shape::TriangleMesh;
 use glam::{Vec2, Vec3};
-use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
@@ -11,7 +10,7 @@ use std::path::Path;
 /// (a missing `.mtl` file is no error). Normals and texture coordinates are kept only if every
 /// vertex has them.
 pub(super) fn load(path: &Path) -> Result<TriangleMesh, String> {
-    let file = File::open(path).map_err(|e| e.to_string())?;
+    let file = super::ply::open_mesh_file(path)?;
     let options =
         tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
     let (models, _) = tobj::load_obj_buf(&mut BufReader::new(file), &options, |_| Ok(Default::default()))

@@ -10,6 +10,7 @@
 use super::document::Element;
 use super::plugins;
 use super::transform;
+use super::values::{parse_float, tokens, vector3};
 use super::LoadError;
 use glam::{Mat4, Vec3};
 use haze_core::color::{spectrum_to_linear_srgb, SpectrumKind};
@@ -218,6 +219,9 @@ impl<'a> Params<'a> {
         for (i, k) in ["x", "y", "z"].iter().enumerate() {
             if let Some(v) = el.attr(k) {
                 p[i] = parse_float(v).map_err(|m| el.error(format!("in '{k}': {m}")))?;
+                if !p[i].is_finite() {
+                    return Err(el.error(format!("'{k}' must be a finite number, got '{v}'")));
+                }
             }
         }
         Ok(Some(p))
@@ -295,6 +299,11 @@ fn expect_tag(el: &Element, name: &str, tags: &[&str]) -> Result<(), LoadError> 
 fn float_value(el: &Element, name: &str) -> Result<f32, LoadError> {
     expect_tag(el, name, &["float", "integer"])?;
     let v = el.required_attr("value")?;
+    if el.tag == "integer" {
+        // As Mitsuba 3: an <integer> holds an integer, not any number.
+        let i: i64 = v.trim().parse().map_err(|_| el.error(format!("cannot parse '{v}' as an integer")))?;
+        return Ok(i as f32);
+    }
     let x = parse_float(v).map_err(|m| el.error(m))?;
     finite(el, name, x)
 }
@@ -371,42 +380,4 @@ fn wavelength_list(el: &Element, v: &str, kind: SpectrumKind) -> Result<Rgb, Loa
         return Err(el.error(format!("a spectrum needs at least two wavelength:value pairs, got '{v}'")));
     }
     Ok(Rgb(spectrum_to_linear_srgb(&wavelengths, &values, kind)))
-}
-
-/// Three numbers from `value`; one number means all three (Mitsuba 3's `parse_named_vector`).
-pub(super) fn vector3(el: &Element, value: &str) -> Result<Vec3, LoadError> {
-    let c = tokens(value)
-        .iter()
-        .map(|s| parse_float(s))
-        .collect::<Result<Vec<f32>, String>>()
-        .map_err(|m| el.error(m))?;
-    match c[..] {
-        [v] => Ok(Vec3::splat(v)),
-        [x, y, z] => Ok(Vec3::new(x, y, z)),
-        _ => Err(el.error(format!("expected 1 or 3 values in '{value}', got {}", c.len()))),
-    }
-}
-
-/// Splits a list on commas and white space, as Mitsuba 3's `string::tokenize`.
-pub(super) fn tokens(s: &str) -> Vec<&str> {
-    s.split(|c: char| c == ',' || c.is_whitespace()).filter(|t| !t.is_empty()).collect()
-}
-
-/// One number; the whole (trimmed) string must be the number.
-pub(super) fn parse_float(s: &str) -> Result<f32, String> {
-    s.trim().parse::<f32>().map_err(|_| format!("cannot parse '{s}' as a number"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn number_lists() {
-        assert_eq!(tokens(" 1, 2 ,3\t4 "), vec!["1", "2", "3", "4"]);
-        assert_eq!(parse_float(" 2.5 "), Ok(2.5));
-        assert!(parse_float("abc").is_err());
-        assert!(parse_float("1,2").is_err());
-        assert!(parse_float("").is_err());
-    }
 }

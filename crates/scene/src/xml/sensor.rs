@@ -1,10 +1,11 @@
 //! `<sensor type="perspective">` with its `<film type="hdrfilm">` (and `<rfilter>`),
 //! `<sampler type="independent">` and optional medium.
 
-use super::builder::Builder;
+use super::context::Builder;
 use super::document::Element;
-use super::params::{parse_float, Params};
+use super::params::Params;
 use super::transform::uniform_scale;
+use super::values::parse_float;
 use super::LoadError;
 use crate::camera::{Camera, PixelFilter};
 use glam::Mat4;

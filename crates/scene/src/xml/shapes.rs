@@ -1,7 +1,7 @@
 //! Shape plugins `sphere`, `cube`, `rectangle`, `disk`, `obj` and `ply`, with their BSDF,
 //! interior/exterior media and area emitter.
 
-use super::builder::Builder;
+use super::context::Builder;
 use super::document::Element;
 use super::params::Params;
 use super::transform::uniform_scale;
@@ -39,6 +39,7 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), Load
         }
         _ => Geometry::Mesh(mesh_file(b, &p, &to_world, flip_normals)?),
     };
+    check_extent(&p, &geometry)?;
 
     let mut bsdf: Option<Bsdf> = None;
     let mut interior: Option<MediumId> = None;
@@ -130,13 +131,61 @@ fn sphere(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, L
     Ok(Geometry::Sphere { center: to_world.transform_point3(center), radius: radius * scale, flip_normals })
 }
 
+/// Geometry must lie within `MAX_COORDINATE` of the origin (the BVH cannot hold larger
+/// coordinates, and f32 has no precision left for rays there) and be finite.
+fn check_extent(p: &Params, geometry: &Geometry) -> Result<(), LoadError> {
+    use crate::accel::MAX_COORDINATE;
+    let largest = match geometry {
+        Geometry::Mesh(m) => m.positions.iter().map(|v| v.abs().max_element()).fold(0.0f32, |a, b| {
+            if b.is_nan() {
+                f32::NAN
+            } else {
+                a.max(b)
+            }
+        }),
+        Geometry::Sphere { center, radius, .. } => center.abs().max_element() + radius,
+        Geometry::Disk { to_world, .. } => {
+            let o = to_world.transform_point3(Vec3::ZERO);
+            let r =
+                to_world.transform_vector3(Vec3::X).length() + to_world.transform_vector3(Vec3::Y).length();
+            o.abs().max_element() + r
+        }
+    };
+    if largest.is_nan() || largest > MAX_COORDINATE {
+        return Err(p.element().error(format!(
+            "the shape reaches coordinates of {largest:e}; haze takes geometry within {MAX_COORDINATE:e} \
+             of the origin (scale the scene down)"
+        )));
+    }
+    Ok(())
+}
+
 fn require_invertible(p: &Params, to_world: &Mat4) -> Result<Mat3, LoadError> {
     let l = Mat3::from_mat4(*to_world);
-    if l.determinant().abs() <= 1e-12 {
+    let d = l.as_dmat3();
+    let lengths = [d.x_axis.length(), d.y_axis.length(), d.z_axis.length()];
+    // Relative to the axes' lengths, so that a uniformly tiny (or huge) shape is not called
+    // flat; in f64, as products of tiny or huge lengths under- or overflow f32.
+    let volume = lengths.iter().product::<f64>();
+    if volume.is_nan() || volume <= 0.0 || (d.determinant().abs() / volume) <= 1e-9 {
         return Err(p.error_at("to_world", "to_world is singular (flattens the shape)"));
+    }
+    let smallest = lengths.iter().copied().fold(f64::INFINITY, f64::min) as f32;
+    if smallest < MIN_SCALE {
+        return Err(p.error_at(
+            "to_world",
+            format!(
+                "to_world scales the shape by {smallest:e}: too small for f32 ray tracing \
+                 (haze takes scales of at least {MIN_SCALE:e}; scale the scene up)"
+            ),
+        ));
     }
     Ok(l)
 }
+
+/// Smallest scale of a shape's `to_world` haze accepts: below it, ray offsets and f32
+/// spacing are as large as the shape.
+const MIN_SCALE: f32 = 1e-12;
 
 /// A planar shape needs its local x and y axes to stay independent.
 fn require_planar_rank(p: &Params, to_world: &Mat4) -> Result<(), LoadError> {

@@ -3,7 +3,7 @@
 //! previous ones: `M = op * M`).
 
 use super::document::Element;
-use super::params::{parse_float, tokens, vector3};
+use super::values::{parse_float, tokens, vector3};
 use super::LoadError;
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
@@ -28,6 +28,9 @@ pub(super) fn parse(el: &Element) -> Result<Mat4, LoadError> {
                 let axis = named_vector(op, 0.0)?;
                 let angle = op.required_attr("angle")?;
                 let angle = parse_float(angle).map_err(|m| op.error(format!("in 'angle': {m}")))?;
+                if !angle.is_finite() {
+                    return Err(op.error(format!("'angle' must be a finite number, got {angle}")));
+                }
                 rotate(axis, angle).map_err(|m| op.error(m))?
             }
             "matrix" => {
@@ -69,6 +72,9 @@ fn named_vector(op: &Element, default: f32) -> Result<Vec3, LoadError> {
     for (i, k) in ["x", "y", "z"].iter().enumerate() {
         if let Some(s) = op.attr(k) {
             v[i] = parse_float(s).map_err(|m| op.error(format!("in '{k}': {m}")))?;
+            if !v[i].is_finite() {
+                return Err(op.error(format!("'{k}' must be a finite number, got '{s}'")));
+            }
         }
     }
     Ok(v)
@@ -76,14 +82,29 @@ fn named_vector(op: &Element, default: f32) -> Result<Vec3, LoadError> {
 
 /// Right-handed rotation by `angle_deg` degrees about `axis` (any length but zero).
 pub(super) fn rotate(axis: Vec3, angle_deg: f32) -> Result<Mat4, String> {
-    let axis = axis.try_normalize().ok_or("the rotation axis is zero")?;
+    if !axis.is_finite() {
+        return Err(format!("the rotation axis ({}, {}, {}) is not finite", axis.x, axis.y, axis.z));
+    }
+    // Scaled first, so that a huge axis (whose squared length overflows) or a tiny one (whose
+    // squared length underflows) still gives its direction.
+    let largest = axis.abs().max_element();
+    let axis =
+        (axis / largest).try_normalize().filter(|_| largest > 0.0).ok_or("the rotation axis is zero")?;
     Ok(Mat4::from_axis_angle(axis, angle_deg.to_radians()))
 }
 
 /// A matrix from 16 numbers (4x4) or 9 numbers (3x3 linear part), row by row.
 fn matrix(value: &str) -> Result<Mat4, String> {
     let v = tokens(value).iter().map(|s| parse_float(s)).collect::<Result<Vec<f32>, String>>()?;
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(format!("the matrix holds a number that is not finite ({x})"));
+    }
     match v.len() {
+        16 if v[12..] != [0.0, 0.0, 0.0, 1.0] => Err(format!(
+            "the bottom row of a 4x4 matrix must be 0 0 0 1 (haze takes affine transforms only), \
+             got {} {} {} {}",
+            v[12], v[13], v[14], v[15]
+        )),
         16 => Ok(Mat4::from_cols_slice(&v).transpose()),
         9 => Ok(Mat4::from_mat3(Mat3::from_cols_slice(&v).transpose())),
         n => Err(format!("expected 16 (or 9) values, got {n}")),
@@ -94,7 +115,11 @@ fn matrix(value: &str) -> Result<Mat4, String> {
 /// `(left, up', dir, origin)` with `dir = normalize(target - origin)`,
 /// `left = normalize(cross(up, dir))`, `up' = cross(dir, left)`.
 pub(super) fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Result<Mat4, String> {
-    let dir = (target - origin).try_normalize().ok_or("lookat: origin and target are the same point")?;
+    let dir = target - origin;
+    if !dir.is_finite() {
+        return Err("lookat: origin and target are too far apart (target - origin is not finite)".into());
+    }
+    let dir = dir.try_normalize().ok_or("lookat: origin and target are the same point")?;
     let left = up.cross(dir);
     if left.length() <= 1e-6 * up.length().max(f32::MIN_POSITIVE) {
         return Err(format!(

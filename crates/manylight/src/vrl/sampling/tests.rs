@@ -5,104 +5,8 @@
 use super::*;
 use glam::Quat;
 use haze_core::Sampler;
-use haze_testkit::chi2::{chi2_interval, chi2_test, Chi2Result};
-
-/// Global adaptive Gauss-Kronrod (7-15) quadrature of `f` over `[a, b]` split first at
-/// `breaks` (peaks of the integrand), to a relative tolerance.
-fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, breaks: &[f64], rel_tol: f64) -> f64 {
-    #[allow(clippy::excessive_precision)]
-    const XK: [f64; 8] = [
-        0.991455371120812639,
-        0.949107912342758525,
-        0.864864423359769073,
-        0.741531185599394440,
-        0.586087235467691130,
-        0.405845151377397167,
-        0.207784955007898468,
-        0.0,
-    ];
-    #[allow(clippy::excessive_precision)]
-    const WK: [f64; 8] = [
-        0.022935322010529225,
-        0.063092092629978553,
-        0.104790010322250184,
-        0.140653259715525919,
-        0.169004726639267903,
-        0.190350578064785410,
-        0.204432940075298892,
-        0.209482141084727828,
-    ];
-    #[allow(clippy::excessive_precision)]
-    const WG: [f64; 4] =
-        [0.129484966168869693, 0.279705391489276668, 0.381830050505118945, 0.417959183673469388];
-    let gk = |a: f64, b: f64| {
-        let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
-        let (mut k, mut g) = (WK[7] * f(c), WG[3] * f(c));
-        for i in 0..7 {
-            let s = f(c - r * XK[i]) + f(c + r * XK[i]);
-            k += WK[i] * s;
-            if i % 2 == 1 {
-                g += WG[i / 2] * s;
-            }
-        }
-        (k * r, ((k - g) * r).abs())
-    };
-    let mut pts: Vec<f64> = std::iter::once(a)
-        .chain(breaks.iter().copied().filter(|&x| x > a && x < b))
-        .chain(std::iter::once(b))
-        .collect();
-    pts.sort_by(f64::total_cmp);
-    let mut parts: Vec<(f64, f64, f64, f64)> =
-        pts.windows(2).map(|w| (w[0], w[1], gk(w[0], w[1]).0, gk(w[0], w[1]).1)).collect();
-    for _ in 0..5000 {
-        let total: f64 = parts.iter().map(|p| p.2).sum();
-        let err: f64 = parts.iter().map(|p| p.3).sum();
-        if err <= rel_tol * total.abs() {
-            break;
-        }
-        let i = (0..parts.len()).max_by(|&i, &j| parts[i].3.total_cmp(&parts[j].3)).unwrap();
-        let (lo, hi, _, _) = parts.swap_remove(i);
-        let mid = 0.5 * (lo + hi);
-        for (x, y) in [(lo, mid), (mid, hi)] {
-            let (k, e) = gk(x, y);
-            parts.push((x, y, k, e));
-        }
-    }
-    parts.iter().map(|p| p.2).sum()
-}
-
-/// Chi-square test with expected counts from adaptive quadrature of the pdf over each bin:
-/// `chi2_interval`'s midpoint rule cannot resolve the `1e-3`-wide peaks of some cases.
-fn chi2_peaked(
-    mut sample: impl FnMut() -> f64,
-    pdf: &dyn Fn(f64) -> f64,
-    a: f64,
-    b: f64,
-    peak: f64,
-    bins: usize,
-    n: usize,
-) -> Chi2Result {
-    let w = (b - a) / bins as f64;
-    let mut observed = vec![0.0; bins];
-    let mut outside = 0;
-    for _ in 0..n {
-        let x = sample();
-        if !(x >= a && x <= b) {
-            outside += 1;
-            continue;
-        }
-        observed[(((x - a) / w) as usize).min(bins - 1)] += 1.0;
-    }
-    let expected: Vec<f64> = (0..bins)
-        .map(|i| {
-            let (lo, hi) = (a + w * i as f64, a + w * (i + 1) as f64);
-            integrate(pdf, lo, hi, &[peak], 1e-9) * n as f64
-        })
-        .collect();
-    let mut r = chi2_test(&observed, &expected);
-    r.outside_support += outside;
-    r
-}
+use haze_testkit::chi2::{chi2_interval, chi2_interval_peaked};
+use haze_testkit::quadrature::integrate;
 
 // -- equiangular ---------------------------------------------------------------------------
 
@@ -144,7 +48,7 @@ fn equiangular_samples_match_pdf_chi2() {
             chi2_interval(sample, pdf, a as f64, b as f64, 50, 100_000)
         } else {
             let eq = Equiangular::new(delta as f64, h as f64, a as f64, b as f64).unwrap();
-            chi2_peaked(sample, &|t| eq.pdf(t), a as f64, b as f64, delta as f64, 50, 100_000)
+            chi2_interval_peaked(sample, |t| eq.pdf(t), a as f64, b as f64, &[delta as f64], 50, 100_000)
         };
         assert!(r.passed(0.01), "case {k}: {r}");
     }
@@ -257,7 +161,7 @@ fn vrl_point_samples_match_pdf_chi2() {
         let r = if d >= 0.05 {
             chi2_interval(sample, |v| smp.pdf(v as f32) as f64, a, b, 50, 100_000)
         } else {
-            chi2_peaked(sample, &|v| smp.pdf_f64(v), a, b, v_c as f64, 50, 100_000)
+            chi2_interval_peaked(sample, |v| smp.pdf_f64(v), a, b, &[v_c as f64], 50, 100_000)
         };
         assert!(r.passed(0.01), "case {k}: {r}");
     }

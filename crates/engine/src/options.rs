@@ -1,0 +1,894 @@
+//! Every option of a render, once: its name, default, validation, help text and the methods it
+//! applies to ([`OPTIONS`]). `haze render` makes its flags from this table, `haze compare` its
+//! `KEY=VALUE` method options, the Python binding its keyword arguments; [`resolve`] checks and
+//! applies what a front end was given.
+//!
+//! Adding an option is one entry of [`OPTIONS`] (with its field in [`Options`] or
+//! [`MethodOptions`]): `haze render`, `haze compare`, `python -m haze.distributed` and the
+//! binding take it from there. The Python signatures (python/haze) spell the options out for
+//! editors and `help()`; `python/tests/test_options.py` fails until each has the new one, and
+//! `crates/cli/tests/options.rs` until the README's usage block does.
+//!
+//! An option given for a method it does not apply to is an error naming the option and the
+//! method, never silently ignored.
+
+use crate::methods::MethodOptions;
+use anyhow::{anyhow, bail, Result};
+use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings};
+use haze_manylight::tree::bound::BoundKind;
+use haze_render::progressive::RenderSettings;
+use haze_scene::Scene;
+use std::fmt;
+
+/// The rendering methods, each once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MethodKind {
+    /// The reference volumetric path tracer.
+    VolPath,
+    /// Virtual ray lights, brute force.
+    Vrl,
+    /// Virtual point lights, brute force.
+    Vpl,
+    /// Virtual ray lights through a light tree and per-segment cuts.
+    VrlLightcuts,
+    /// Virtual point lights through a light tree and per-segment cuts.
+    VplLightcuts,
+}
+
+use MethodKind::*;
+
+impl MethodKind {
+    /// Every method, in the order help texts list them.
+    pub const ALL: [MethodKind; 5] = [VolPath, Vrl, Vpl, VrlLightcuts, VplLightcuts];
+    /// The many-light methods.
+    pub const MANY_LIGHT: &'static [MethodKind] = &[Vrl, Vpl, VrlLightcuts, VplLightcuts];
+    /// The lightcut methods.
+    pub const LIGHTCUTS: &'static [MethodKind] = &[VrlLightcuts, VplLightcuts];
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            VolPath => "volpath",
+            Vrl => "vrl",
+            Vpl => "vpl",
+            VrlLightcuts => "vrl_lightcuts",
+            VplLightcuts => "vpl_lightcuts",
+        }
+    }
+
+    /// The method called `name`; `volpathmis` (Mitsuba 3's name for volpath with spectral MIS,
+    /// which haze's volpath always does) is volpath. (`path`, which is volpath only for scenes
+    /// without media, is resolved by `methods::method_kind`, which sees the scene.)
+    pub fn from_name(name: &str) -> Option<MethodKind> {
+        if name == "volpathmis" {
+            return Some(VolPath);
+        }
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    pub fn is_lightcuts(self) -> bool {
+        Self::LIGHTCUTS.contains(&self)
+    }
+}
+
+impl fmt::Display for MethodKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// `volpath, vrl, vpl, vrl_lightcuts, vpl_lightcuts`: for help texts and error messages.
+pub fn method_names() -> String {
+    names(&MethodKind::ALL)
+}
+
+/// `methods`' names, comma-separated.
+pub fn names(methods: &[MethodKind]) -> String {
+    methods.iter().map(|m| m.name()).collect::<Vec<_>>().join(", ")
+}
+
+/// What values an option takes (and how its text is checked).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kind {
+    /// An integer from 1 to `max`; `_` separators and the suffixes `k` (x1000) and `M`
+    /// (x1000000) are accepted (`100k`).
+    Count { max: u64 },
+    /// Any integer from 0 to 2^64 - 1.
+    Integer,
+    /// A finite number >= 0.
+    NonNegative,
+    /// A finite number > 0.
+    Positive,
+    /// A time budget in seconds: at least a millisecond (no pass could finish in less) and at
+    /// most a year (a `Duration` of 1e20 s does not exist).
+    Seconds,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+    /// On or off (`true`/`false`); on the command line a flag without value.
+    Flag,
+}
+
+/// A checked option value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Value {
+    Int(u64),
+    Float(f64),
+    Word(&'static str),
+    Flag(bool),
+}
+
+impl Value {
+    fn int(self) -> u64 {
+        match self {
+            Value::Int(n) => n,
+            other => unreachable!("{other:?} is not an integer"),
+        }
+    }
+
+    fn float(self) -> f64 {
+        match self {
+            Value::Float(x) => x,
+            other => unreachable!("{other:?} is not a number"),
+        }
+    }
+
+    fn word(self) -> &'static str {
+        match self {
+            Value::Word(w) => w,
+            other => unreachable!("{other:?} is not a word"),
+        }
+    }
+
+    fn flag(self) -> bool {
+        match self {
+            Value::Flag(b) => b,
+            other => unreachable!("{other:?} is not a flag"),
+        }
+    }
+}
+
+/// A count with optional `_` separators and a `k` or `M` suffix.
+pub fn parse_count(s: &str) -> Option<u64> {
+    let s = s.trim().replace('_', "");
+    let (digits, scale) = match s.as_bytes().last()? {
+        b'k' => (&s[..s.len() - 1], 1_000),
+        b'M' => (&s[..s.len() - 1], 1_000_000),
+        _ => (&s[..], 1),
+    };
+    digits.parse::<u64>().ok()?.checked_mul(scale)
+}
+
+impl Kind {
+    /// The value of `text`, or what a value must be (for "NAME must be ..., got 'TEXT'").
+    pub fn parse(self, text: &str) -> Result<Value, String> {
+        let t = text.trim();
+        // Numbers are stored in f32 by the integrators: a value beyond its range is no number.
+        let number = || t.parse::<f64>().ok().filter(|x| (*x as f32).is_finite());
+        match self {
+            Kind::Count { max } => {
+                parse_count(t).filter(|n| (1..=max).contains(n)).map(Value::Int).ok_or_else(|| match max {
+                    u64::MAX => "must be a positive integer (e.g. 10000, 100k, 1M)".to_string(),
+                    _ => format!("must be a positive integer up to {max}"),
+                })
+            }
+            Kind::Integer => t.parse().map(Value::Int).map_err(|_| "must be an integer >= 0".into()),
+            Kind::NonNegative => {
+                number().filter(|x| *x >= 0.0).map(Value::Float).ok_or_else(|| "must be a number >= 0".into())
+            }
+            Kind::Positive => number()
+                .filter(|x| *x > 0.0)
+                .map(Value::Float)
+                .ok_or_else(|| "must be a positive number".into()),
+            Kind::Seconds => {
+                const MIN: f64 = 1e-3;
+                const MAX: f64 = 365.0 * 24.0 * 3600.0;
+                match t.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0) {
+                    None => Err("must be a positive number of seconds".into()),
+                    Some(x) if x < MIN => {
+                        Err(format!("is too small a budget: no pass would finish (give at least {MIN} s)"))
+                    }
+                    Some(x) if x > MAX => Err(format!("is more than a year (give at most {MAX} s)")),
+                    Some(x) => Ok(Value::Float(x)),
+                }
+            }
+            Kind::Choice(words) => words.iter().find(|w| **w == t).map(|w| Value::Word(w)).ok_or_else(|| {
+                let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
+                match quoted.split_last() {
+                    Some((last, rest)) if !rest.is_empty() => {
+                        format!("must be {} or {last}", rest.join(", "))
+                    }
+                    _ => format!("must be {}", quoted.join("")),
+                }
+            }),
+            Kind::Flag => match t.to_ascii_lowercase().as_str() {
+                "true" => Ok(Value::Flag(true)),
+                "false" => Ok(Value::Flag(false)),
+                _ => Err("must be true or false".into()),
+            },
+        }
+    }
+
+    /// A short name of the kind, for the Python binding's table.
+    pub fn label(self) -> &'static str {
+        match self {
+            Kind::Count { .. } => "count",
+            Kind::Integer => "integer",
+            Kind::NonNegative | Kind::Positive | Kind::Seconds => "number",
+            Kind::Choice(_) => "choice",
+            Kind::Flag => "flag",
+        }
+    }
+}
+
+/// An option's default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Default {
+    /// This value (checked like a given one).
+    Value(&'static str),
+    /// No value; the text says what happens instead (e.g. "off").
+    Unset(&'static str),
+}
+
+/// Which part of a run an option sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scope {
+    /// The whole render (sample budget, seed, passes): `haze compare` sets these for every
+    /// method at once.
+    Render,
+    /// The method: `haze compare` takes these per method (`--method vrl_lightcuts,epsilon=0.01`).
+    Method,
+}
+
+/// How a front end spells option names in messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Spelling {
+    /// `--max-cut` (the command line).
+    Flag,
+    /// `max_cut` (Python keywords, `haze compare` method options).
+    Keyword,
+}
+
+/// One option: everything every front end needs to know about it.
+pub struct OptionSpec {
+    /// snake_case; the command-line flag is `--` and the name with `-` for `_`.
+    pub name: &'static str,
+    pub kind: Kind,
+    pub default: Default,
+    /// One sentence or two, without the default or the methods (see [`OptionSpec::help_text`]).
+    pub help: &'static str,
+    pub applies_to: &'static [MethodKind],
+    /// Options that cannot be given together with this one.
+    pub conflicts_with: &'static [&'static str],
+    /// `(option, value)`: this option applies only when that option has that value (e.g. the
+    /// bound-cut options only with `cut=bound`); otherwise it is an error naming both.
+    pub requires: Option<(&'static str, &'static str)>,
+    pub scope: Scope,
+    /// A valid value other than the default (for the tests that feed every option to every
+    /// method).
+    pub example: &'static str,
+    set: fn(&mut Options, Value),
+    /// The value in effect, `None` when unset.
+    get: fn(&Options) -> Option<String>,
+}
+
+impl fmt::Debug for OptionSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "OptionSpec({})", self.name)
+    }
+}
+
+impl PartialEq for OptionSpec {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl OptionSpec {
+    /// `--max-cut`.
+    pub fn flag(&self) -> String {
+        format!("--{}", self.name.replace('_', "-"))
+    }
+
+    /// The name as `spelling` writes it.
+    pub fn spelled(&self, spelling: Spelling) -> String {
+        match spelling {
+            Spelling::Flag => self.flag(),
+            Spelling::Keyword => self.name.to_string(),
+        }
+    }
+
+    pub fn applies_to_all(&self) -> bool {
+        MethodKind::ALL.iter().all(|m| self.applies_to.contains(m))
+    }
+
+    /// The help text with the methods it applies to (when not all) and the default.
+    pub fn help_text(&self) -> String {
+        let mut s = String::new();
+        if !self.applies_to_all() {
+            s += &format!("[{}] ", names(self.applies_to));
+        }
+        s += self.help;
+        match self.default {
+            Default::Value(v) => s += &format!(" Default: {v}."),
+            Default::Unset(what) => s += &format!(" Default: {what}."),
+        }
+        s
+    }
+
+    /// `text` checked as this option's value; the error names the option as `spelling` does.
+    pub fn parse(&self, text: &str, spelling: Spelling) -> Result<Value> {
+        self.kind
+            .parse(text)
+            .map_err(|what| anyhow!("{} {what}, got '{}'", self.spelled(spelling), text.trim()))
+    }
+
+    /// The value in effect in `options`, as text (`None`: unset).
+    pub fn value_in(&self, options: &Options) -> Option<String> {
+        (self.get)(options)
+    }
+}
+
+/// The error for an option given to a method it does not apply to (`what`: the option as the
+/// front end spells it).
+pub fn not_applicable(what: &str, method: MethodKind, applies_to: &[MethodKind]) -> anyhow::Error {
+    anyhow!("{what} does not apply to {method} (only to {})", names(applies_to))
+}
+
+const ALL: &[MethodKind] = &MethodKind::ALL;
+
+/// Every option, in the order help texts list them.
+pub const OPTIONS: &[OptionSpec] = &[
+    OptionSpec {
+        name: "spp",
+        kind: Kind::Count { max: u32::MAX as u64 },
+        default: Default::Unset("the scene's sampler sample_count"),
+        help: "Samples per pixel.",
+        applies_to: ALL,
+        conflicts_with: &["time"],
+        requires: None,
+        scope: Scope::Render,
+        example: "2",
+        set: |o, v| o.spp = Some(v.int() as u32),
+        get: |o| o.spp.map(|n| n.to_string()),
+    },
+    OptionSpec {
+        name: "time",
+        kind: Kind::Seconds,
+        default: Default::Unset("off (render spp samples)"),
+        help: "Render for this many seconds instead of a sample count (whole passes: the last pass \
+               started in time is finished).",
+        applies_to: ALL,
+        conflicts_with: &["spp"],
+        requires: None,
+        scope: Scope::Render,
+        example: "0.2",
+        set: |o, v| o.time = Some(v.float()),
+        get: |o| o.time.map(|t| t.to_string()),
+    },
+    OptionSpec {
+        name: "seed",
+        kind: Kind::Integer,
+        default: Default::Value("0"),
+        help: "Seed of every random choice; the same seed gives the same image, whatever the \
+               number of threads.",
+        applies_to: ALL,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Render,
+        example: "7",
+        set: |o, v| o.seed = v.int(),
+        get: |o| Some(o.seed.to_string()),
+    },
+    OptionSpec {
+        name: "spp_per_pass",
+        kind: Kind::Count { max: u32::MAX as u64 },
+        default: Default::Value("1"),
+        help: "Samples per pixel in each progressive pass.",
+        applies_to: ALL,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Render,
+        example: "2",
+        set: |o, v| o.spp_per_pass = v.int() as u32,
+        get: |o| Some(o.spp_per_pass.to_string()),
+    },
+    OptionSpec {
+        name: "components",
+        kind: Kind::Flag,
+        default: Default::Value("false"),
+        help: "Also keep the components emitted, single, multiple and surface (they sum to the \
+               image).",
+        applies_to: ALL,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Render,
+        example: "true",
+        set: |o, v| o.components = v.flag(),
+        get: |o| Some(o.components.to_string()),
+    },
+    OptionSpec {
+        name: "vrls",
+        kind: Kind::Count { max: u64::MAX },
+        default: Default::Value("10000"),
+        help: "Trace about this many virtual ray lights per pass (the light-path count is fixed \
+               from a pilot run).",
+        applies_to: MethodKind::MANY_LIGHT,
+        conflicts_with: &["light_paths"],
+        requires: None,
+        scope: Scope::Method,
+        example: "300",
+        set: |o, v| o.method.budget = LightBudget::Vrls(v.int()),
+        get: |o| match o.method.budget {
+            LightBudget::Vrls(n) => Some(n.to_string()),
+            LightBudget::Paths(_) => None,
+        },
+    },
+    OptionSpec {
+        name: "light_paths",
+        kind: Kind::Count { max: u64::MAX },
+        default: Default::Unset("set by vrls"),
+        help: "Trace exactly this many light paths per pass (instead of vrls).",
+        applies_to: MethodKind::MANY_LIGHT,
+        conflicts_with: &["vrls"],
+        requires: None,
+        scope: Scope::Method,
+        example: "40",
+        set: |o, v| o.method.budget = LightBudget::Paths(v.int()),
+        get: |o| match o.method.budget {
+            LightBudget::Paths(n) => Some(n.to_string()),
+            LightBudget::Vrls(_) => None,
+        },
+    },
+    OptionSpec {
+        name: "vpl_clamp",
+        kind: Kind::Positive,
+        default: Default::Unset("off"),
+        help: "Clamp the geometry term 1/w^2 at this value (biased).",
+        applies_to: &[Vpl],
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "10",
+        set: |o, v| o.method.vpl_clamp = Some(v.float() as f32),
+        get: |o| o.method.vpl_clamp.map(|c| c.to_string()),
+    },
+    OptionSpec {
+        name: "cut",
+        kind: Kind::Choice(&["stochastic", "bound"]),
+        default: Default::Value("stochastic"),
+        help: "How each camera segment's cut is chosen: stochastic (bound-free: a cut of cut_size \
+               nodes by importance, one light sampled in each; unbiased, a fixed cost per segment) \
+               or bound (the paper's deterministic cut by upper bounds, with epsilon, max_cut and \
+               bound; docs/lightcuts.md).",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "bound",
+        set: |o, v| {
+            o.method.lightcuts.strategy =
+                if v.word() == "bound" { CutStrategy::Bound } else { CutStrategy::Stochastic }
+        },
+        get: |o| {
+            Some(
+                match o.method.lightcuts.strategy {
+                    CutStrategy::Stochastic => "stochastic",
+                    CutStrategy::Bound => "bound",
+                }
+                .into(),
+            )
+        },
+    },
+    OptionSpec {
+        name: "cut_size",
+        kind: Kind::Count { max: 1 << 20 },
+        default: Default::Value("1"),
+        help: "Nodes in the stochastic cut: lights sampled per camera segment (the default is \
+               measured: docs/lightcuts.md).",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: Some(("cut", "stochastic")),
+        scope: Scope::Method,
+        example: "2",
+        set: |o, v| o.method.lightcuts.stochastic.cut_size = v.int() as u32,
+        get: |o| Some(o.method.lightcuts.stochastic.cut_size.to_string()),
+    },
+    OptionSpec {
+        name: "epsilon",
+        kind: Kind::NonNegative,
+        default: Default::Value("0.02"),
+        help: "Refine a cut until every node's bound is at most epsilon times the cut's estimate \
+               (largest RGB channel of each).",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: Some(("cut", "bound")),
+        scope: Scope::Method,
+        example: "0.05",
+        set: |o, v| o.method.lightcuts.cut.epsilon = v.float() as f32,
+        get: |o| Some(o.method.lightcuts.cut.epsilon.to_string()),
+    },
+    OptionSpec {
+        name: "max_cut",
+        kind: Kind::Count { max: u32::MAX as u64 },
+        default: Default::Value("1000"),
+        help: "Most nodes in a cut.",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: Some(("cut", "bound")),
+        scope: Scope::Method,
+        example: "50",
+        set: |o, v| o.method.lightcuts.cut.max_cut = v.int() as u32,
+        get: |o| Some(o.method.lightcuts.cut.max_cut.to_string()),
+    },
+    OptionSpec {
+        name: "bound",
+        kind: Kind::Choice(&["paper", "conservative", "tight"]),
+        default: Default::Value("paper"),
+        help: "Cluster bound: paper (Vibert et al. 2019), conservative, or tight (conservative, \
+               with the VRL integral bounded through the VRLs' directions; docs/lightcuts.md).",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: Some(("cut", "bound")),
+        scope: Scope::Method,
+        example: "tight",
+        set: |o, v| {
+            o.method.lightcuts.bound = match v.word() {
+                "paper" => BoundKind::Paper,
+                "conservative" => BoundKind::Conservative,
+                _ => BoundKind::Tight,
+            }
+        },
+        get: |o| {
+            Some(
+                match o.method.lightcuts.bound {
+                    BoundKind::Paper => "paper",
+                    BoundKind::Conservative => "conservative",
+                    BoundKind::Tight => "tight",
+                }
+                .into(),
+            )
+        },
+    },
+    OptionSpec {
+        name: "builder",
+        kind: Kind::Choice(&["agglomerative", "median"]),
+        default: Default::Value("agglomerative"),
+        help: "Light-tree builder: agglomerative (the paper's 3-step parallel build) or median \
+               (median split).",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "median",
+        set: |o, v| {
+            o.method.lightcuts.builder =
+                if v.word() == "median" { Builder::MedianSplit } else { Builder::Agglomerative }
+        },
+        get: |o| {
+            Some(
+                match o.method.lightcuts.builder {
+                    Builder::Agglomerative => "agglomerative",
+                    Builder::MedianSplit => "median",
+                }
+                .into(),
+            )
+        },
+    },
+];
+
+/// The option called `name` (snake_case).
+pub fn find(name: &str) -> Option<&'static OptionSpec> {
+    OPTIONS.iter().find(|o| o.name == name)
+}
+
+/// Every setting of a render, as resolved from the table.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub spp: Option<u32>,
+    pub time: Option<f64>,
+    pub seed: u64,
+    pub spp_per_pass: u32,
+    pub components: bool,
+    pub method: MethodOptions,
+}
+
+impl Options {
+    /// Every option at its default.
+    pub fn defaults() -> Options {
+        let mut o = Options {
+            spp: None,
+            time: None,
+            seed: 0,
+            spp_per_pass: 1,
+            components: false,
+            // Placeholders: the table's defaults below set every field an option owns.
+            method: MethodOptions {
+                budget: LightBudget::Vrls(1),
+                vpl_clamp: None,
+                lightcuts: LightcutSettings::default(),
+            },
+        };
+        for spec in OPTIONS {
+            if let Default::Value(text) = spec.default {
+                let v = spec.kind.parse(text).unwrap_or_else(|e| panic!("default of {}: {e}", spec.name));
+                (spec.set)(&mut o, v);
+            }
+        }
+        o
+    }
+
+    /// The progressive render's settings: `spp` samples (default: the scene's) or `time` seconds.
+    pub fn render_settings(&self, scene: &Scene) -> RenderSettings {
+        RenderSettings {
+            spp: if self.time.is_some() { 0 } else { self.spp.unwrap_or(scene.spp) },
+            time_limit: self.time.map(std::time::Duration::from_secs_f64),
+            seed: self.seed,
+            spp_per_pass: self.spp_per_pass,
+            components: self.components,
+            first_pass: 0,
+        }
+    }
+
+    /// The settings of `passes::render_passes` (which renders a pass range: no `spp` or `time`).
+    pub fn pass_settings(&self) -> crate::passes::PassSettings {
+        crate::passes::PassSettings {
+            seed: self.seed,
+            spp_per_pass: self.spp_per_pass,
+            components: self.components,
+        }
+    }
+
+    /// The method options in effect for `method`, e.g. `vrls=10000 epsilon=0.02 max_cut=1000
+    /// bound=paper builder=agglomerative` (empty for volpath): what `haze render` prints.
+    pub fn describe(&self, method: MethodKind) -> String {
+        OPTIONS
+            .iter()
+            .filter(|s| s.scope == Scope::Method && s.applies_to.contains(&method))
+            .filter(|s| {
+                s.requires.is_none_or(|(name, want)| {
+                    find(name).and_then(|o| o.value_in(self)).is_some_and(|have| have == want)
+                })
+            })
+            .filter_map(|s| Some(format!("{}={}", s.name, (s.get)(self)?)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+}
+
+/// The options of a render with `method`: the table's defaults, then `given` (name, text) pairs
+/// (snake_case names) applied in order. Unknown options, options that do not apply to `method`,
+/// conflicting or repeated options and bad values are errors naming the option as `spelling`
+/// writes it.
+pub fn resolve(method: MethodKind, given: &[(&str, &str)], spelling: Spelling) -> Result<Options> {
+    let mut options = Options::defaults();
+    let mut seen: Vec<&OptionSpec> = Vec::new();
+    for &(name, text) in given {
+        let Some(spec) = find(name) else {
+            let known: Vec<String> = OPTIONS.iter().map(|o| o.spelled(spelling)).collect();
+            let shown = match spelling {
+                Spelling::Flag => format!("--{}", name.replace('_', "-")),
+                Spelling::Keyword => name.to_string(),
+            };
+            bail!("unknown option '{shown}' (available: {})", known.join(", "));
+        };
+        if seen.contains(&spec) {
+            bail!("{} is given twice", spec.spelled(spelling));
+        }
+        if !spec.applies_to.contains(&method) {
+            return Err(not_applicable(&spec.spelled(spelling), method, spec.applies_to));
+        }
+        if let Some(other) = seen.iter().find(|s| spec.conflicts_with.contains(&s.name)) {
+            bail!("give either {} or {}, not both", other.spelled(spelling), spec.spelled(spelling));
+        }
+        let value = spec.parse(text, spelling)?;
+        (spec.set)(&mut options, value);
+        seen.push(spec);
+    }
+    for spec in &seen {
+        if let Some((name, want)) = spec.requires {
+            let other = find(name).expect("a requirement names an option of the table");
+            let have = other.value_in(&options).unwrap_or_default();
+            if have != want {
+                bail!(
+                    "{} does not apply to {method} with {} {have} (only with {} {want})",
+                    spec.spelled(spelling),
+                    other.spelled(spelling),
+                    other.spelled(spelling)
+                );
+            }
+        }
+    }
+    Ok(options)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use haze_manylight::tree::cut::CutSettings;
+
+    /// `given` resolved for `method`, with the requirements (`cut=bound`, ...) of the given
+    /// options added where `given` does not set them.
+    fn ok(method: MethodKind, given: &[(&str, &str)]) -> Options {
+        let mut all: Vec<(&str, &str)> = Vec::new();
+        for (name, _) in given {
+            if let Some(req) = find(name).and_then(|s| s.requires) {
+                if !given.iter().any(|g| g.0 == req.0) && !all.contains(&req) {
+                    all.push(req);
+                }
+            }
+        }
+        all.extend_from_slice(given);
+        resolve(method, &all, Spelling::Keyword).unwrap_or_else(|e| panic!("{all:?}: {e}"))
+    }
+
+    /// The bound-cut options need `cut=bound`, `cut_size` needs the stochastic cut: otherwise
+    /// an error naming the option, the method and the cut.
+    #[test]
+    fn cut_options_need_their_cut() {
+        for (given, want) in [
+            (
+                vec![("epsilon", "0.1")],
+                "epsilon does not apply to vrl_lightcuts with cut stochastic (only with cut bound)",
+            ),
+            (vec![("max_cut", "5")], "max_cut does not apply to vrl_lightcuts with cut stochastic"),
+            (vec![("bound", "tight")], "bound does not apply to vrl_lightcuts with cut stochastic"),
+            (
+                vec![("cut", "bound"), ("cut_size", "4")],
+                "cut_size does not apply to vrl_lightcuts with cut bound",
+            ),
+        ] {
+            assert!(err(VrlLightcuts, &given, Spelling::Keyword).contains(want), "{given:?}");
+        }
+        let o = resolve(VplLightcuts, &[("cut_size", "3")], Spelling::Keyword).unwrap();
+        assert_eq!(o.method.lightcuts.stochastic.cut_size, 3);
+        assert_eq!(o.describe(VplLightcuts), "vrls=10000 cut=stochastic cut_size=3 builder=agglomerative");
+    }
+
+    fn err(method: MethodKind, given: &[(&str, &str)], spelling: Spelling) -> String {
+        match resolve(method, given, spelling) {
+            Ok(_) => panic!("{given:?} with {method} should fail"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn the_table_is_consistent() {
+        for (i, spec) in OPTIONS.iter().enumerate() {
+            assert!(spec.name.chars().all(|c| c.is_ascii_lowercase() || c == '_'), "{}", spec.name);
+            assert!(OPTIONS[..i].iter().all(|o| o.name != spec.name), "{} twice", spec.name);
+            assert!(!spec.applies_to.is_empty(), "{}", spec.name);
+            if spec.scope == Scope::Render {
+                assert!(spec.applies_to_all(), "{} sets the whole render", spec.name);
+            }
+            for c in spec.conflicts_with {
+                let other = find(c).unwrap_or_else(|| panic!("{} conflicts with unknown {c}", spec.name));
+                assert!(other.conflicts_with.contains(&spec.name), "{c} / {}: not symmetric", spec.name);
+            }
+            if let Default::Value(d) = spec.default {
+                assert!(spec.kind.parse(d).is_ok(), "default of {}", spec.name);
+                assert_ne!(spec.kind.parse(spec.example), spec.kind.parse(d), "example of {}", spec.name);
+            }
+            let example = spec.kind.parse(spec.example).unwrap_or_else(|e| panic!("{}: {e}", spec.name));
+            // The example reaches the options: `get` shows it back.
+            let method = spec.applies_to[0];
+            let o = ok(method, &[(spec.name, spec.example)]);
+            let shown = spec.value_in(&o).unwrap_or_else(|| panic!("{} unset", spec.name));
+            assert_eq!(spec.kind.parse(&shown), Ok(example), "{}", spec.name);
+        }
+    }
+
+    #[test]
+    fn defaults_are_the_integrators_own() {
+        let o = Options::defaults();
+        assert_eq!(o.method.budget, LightBudget::Vrls(10_000));
+        let lc = LightcutSettings::default();
+        let CutSettings { epsilon, max_cut } = lc.cut;
+        assert_eq!((o.method.lightcuts.cut.epsilon, o.method.lightcuts.cut.max_cut), (epsilon, max_cut));
+        assert_eq!((o.method.lightcuts.bound, o.method.lightcuts.builder), (lc.bound, lc.builder));
+        assert_eq!((o.spp, o.time, o.seed, o.spp_per_pass, o.components), (None, None, 0, 1, false));
+        assert_eq!(o.method.vpl_clamp, None);
+        assert_eq!(
+            (o.method.lightcuts.strategy, o.method.lightcuts.stochastic),
+            (lc.strategy, lc.stochastic)
+        );
+        // Giving a default explicitly changes nothing (beside the option's requirement).
+        for spec in OPTIONS {
+            if let Default::Value(d) = spec.default {
+                let given = ok(spec.applies_to[0], &[(spec.name, d)]);
+                let base = match spec.requires {
+                    Some(req) => ok(spec.applies_to[0], &[req]),
+                    None => o.clone(),
+                };
+                assert_eq!(format!("{given:?}"), format!("{base:?}"), "{}", spec.name);
+            }
+        }
+    }
+
+    #[test]
+    fn values_are_checked() {
+        let o =
+            ok(VrlLightcuts, &[("vrls", "100k"), ("epsilon", "0.1"), ("max_cut", "7"), ("bound", "tight")]);
+        assert_eq!(o.method.budget, LightBudget::Vrls(100_000));
+        assert_eq!((o.method.lightcuts.cut.epsilon, o.method.lightcuts.cut.max_cut), (0.1, 7));
+        assert_eq!(o.method.lightcuts.bound, BoundKind::Tight);
+        // Every word of a choice is a value of its own.
+        for spec in OPTIONS {
+            if let Kind::Choice(words) = spec.kind {
+                let shown: Vec<_> = words
+                    .iter()
+                    .map(|w| spec.value_in(&ok(spec.applies_to[0], &[(spec.name, w)])).unwrap())
+                    .collect();
+                assert_eq!(shown, *words, "{}", spec.name);
+            }
+        }
+        assert_eq!(ok(Vpl, &[("light_paths", "7")]).method.budget, LightBudget::Paths(7));
+        let flag = Spelling::Flag;
+        for (given, want) in [
+            (vec![("max_cut", "0")], "--max-cut must be a positive integer up to 4294967295, got '0'"),
+            (vec![("epsilon", "nan")], "--epsilon must be a number >= 0, got 'nan'"),
+            (vec![("epsilon", "-1")], "--epsilon must be a number >= 0, got '-1'"),
+            (vec![("epsilon", "1e39")], "--epsilon must be a number >= 0"),
+            (vec![("bound", "foo")], "--bound must be 'paper', 'conservative' or 'tight', got 'foo'"),
+            (vec![("builder", "sah")], "--builder must be 'agglomerative' or 'median', got 'sah'"),
+            (vec![("vrls", "0")], "--vrls must be a positive integer"),
+            (vec![("vrls", "1"), ("light_paths", "2")], "give either --vrls or --light-paths, not both"),
+            (vec![("epsilon", "1"), ("epsilon", "2")], "--epsilon is given twice"),
+            (vec![("alpha", "1")], "unknown option '--alpha'"),
+        ] {
+            let e = err(VrlLightcuts, &given, flag);
+            assert!(e.contains(want), "{given:?}: {e}");
+        }
+        assert!(err(Vrl, &[("spp", "1"), ("time", "1")], flag).contains("give either --spp or --time"));
+        assert!(err(Vrl, &[("time", "inf")], flag).contains("--time must be a positive number"));
+        assert!(err(Vrl, &[("components", "maybe")], Spelling::Keyword).contains("components must be true"));
+    }
+
+    #[test]
+    fn options_of_other_methods_are_errors_naming_both() {
+        for spec in OPTIONS {
+            for method in MethodKind::ALL {
+                let mut given: Vec<(&str, &str)> =
+                    spec.requires.into_iter().filter(|_| spec.applies_to.contains(&method)).collect();
+                given.push((spec.name, spec.example));
+                let r = resolve(method, &given, Spelling::Flag);
+                let default_meets = |(name, want): (&str, &'static str)| {
+                    find(name).is_some_and(move |o| o.default == Default::Value(want))
+                };
+                if spec.applies_to.contains(&method) && spec.requires.is_some_and(|r| !default_meets(r)) {
+                    // Without its requirement the option is an error naming it and the method.
+                    let e = resolve(method, &given[1..], Spelling::Flag).err().map(|e| e.to_string());
+                    let named =
+                        e.as_deref().is_some_and(|e| e.contains(&spec.flag()) && e.contains(method.name()));
+                    assert!(named, "{} with {method} but not {:?}: {e:?}", spec.name, spec.requires);
+                }
+                if spec.applies_to.contains(&method) {
+                    assert!(r.is_ok(), "{} with {method}: {:?}", spec.name, r.err());
+                } else {
+                    let e = r.err().unwrap().to_string();
+                    assert!(e.contains(&spec.flag()) && e.contains(method.name()), "{e}");
+                }
+            }
+        }
+        let e = err(VplLightcuts, &[("vpl_clamp", "1")], Spelling::Keyword);
+        assert_eq!(e, "vpl_clamp does not apply to vpl_lightcuts (only to vpl)");
+    }
+
+    #[test]
+    fn describe_shows_the_method_options_in_effect() {
+        assert_eq!(Options::defaults().describe(VolPath), "");
+        assert_eq!(Options::defaults().describe(Vpl), "vrls=10000");
+        assert_eq!(
+            ok(VrlLightcuts, &[("light_paths", "5"), ("max_cut", "9")]).describe(VrlLightcuts),
+            "light_paths=5 cut=bound epsilon=0.02 max_cut=9 bound=paper builder=agglomerative"
+        );
+    }
+
+    #[test]
+    fn method_names_are_listed_once() {
+        assert_eq!(method_names(), "volpath, vrl, vpl, vrl_lightcuts, vpl_lightcuts");
+        for m in MethodKind::ALL {
+            assert_eq!(MethodKind::from_name(m.name()), Some(m));
+        }
+        assert_eq!(MethodKind::from_name("volpathmis"), Some(VolPath));
+        assert_eq!(MethodKind::from_name("bdpt"), None);
+    }
+}

@@ -1,0 +1,411 @@
+//! `vrl_lightcuts` and `vpl_lightcuts`: one integrator generic over the light kind
+//! ([`ClusterKind`]). Each pass traces its light paths, builds a light tree over the VRLs (or
+//! VPLs) with the three-step parallel builder, and every camera segment estimates the sum over
+//! its lights through a cut of the tree instead of one by one: by default the stochastic,
+//! bound-free cut (`tree::stochastic`), or the paper's deterministic cut by bounds
+//! (`tree::cut`, `--cut bound`).
+//!
+//! Component split as in `vrl`/`vpl`: lights that follow a surface bounce live in a tree of
+//! their own, so `multiple` and `surface` stay separate.
+
+mod kinds;
+
+pub use kinds::{ClusterKind, Vpls, Vrls};
+
+use super::{many_light_radiance, media, paths_per_pass, ManyLightSettings};
+use crate::camera::CameraSegment;
+use crate::lighttrace::trace_light_paths;
+use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
+use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+use crate::tree::cone::{DirCone, LineCone};
+use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
+use crate::tree::importance::ImportanceContext;
+use crate::tree::lights::LightSummary;
+use crate::tree::stochastic::{
+    stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
+};
+use crate::tree::{LightTree, Node};
+use crate::vrl::VrlMedium;
+use haze_core::{Ray, Rgb, Sampler};
+use haze_render::{Integrator, PathRadiance};
+use haze_scene::lights::EmissionError;
+use haze_scene::{MediumId, Scene};
+use std::cell::RefCell;
+use std::marker::PhantomData;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Which tree builder to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Builder {
+    /// The paper's three-step parallel agglomerative build.
+    Agglomerative,
+    /// Top-down median split (baseline).
+    MedianSplit,
+}
+
+/// How a camera segment's cut is chosen (`--cut`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CutStrategy {
+    /// Bound-free: a cut of `cut_size` nodes by importance, one light sampled per node
+    /// (`tree::stochastic`). Unbiased; a fixed cost per camera segment.
+    Stochastic,
+    /// The paper's deterministic cut: refine by upper bounds until `epsilon` or `max_cut`
+    /// (`tree::cut`), each node estimated by its representative.
+    Bound,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct LightcutSettings {
+    pub strategy: CutStrategy,
+    /// `CutStrategy::Stochastic` only.
+    pub stochastic: StochasticSettings,
+    /// `CutStrategy::Bound` only (with `bound` and `theta`).
+    pub cut: CutSettings,
+    pub bound: BoundKind,
+    pub theta: ThetaBound,
+    pub builder: Builder,
+    pub build: BuildSettings,
+}
+
+impl Default for LightcutSettings {
+    fn default() -> Self {
+        LightcutSettings {
+            strategy: CutStrategy::Stochastic,
+            stochastic: StochasticSettings::default(),
+            cut: CutSettings::default(),
+            bound: BoundKind::Paper,
+            theta: ThetaBound::Exact,
+            builder: Builder::Agglomerative,
+            build: BuildSettings::default(),
+        }
+    }
+}
+
+/// Counters reported after rendering.
+#[derive(Default)]
+struct Stats {
+    lights: AtomicU64,
+    passes: AtomicU64,
+    trace_ns: AtomicU64,
+    build_ns: AtomicU64,
+    segments: AtomicU64,
+    cut_total: AtomicU64,
+    cut_max: AtomicU64,
+    hit_max: AtomicU64,
+}
+
+/// `vrl_lightcuts` (`LightcutsIntegrator<Vrls>`) and `vpl_lightcuts`
+/// (`LightcutsIntegrator<Vpls>`): one integrator, generic over the light kind.
+pub struct LightcutsIntegrator<K: ClusterKind> {
+    ml: ManyLightSettings,
+    pub settings: LightcutSettings,
+    paths: u64,
+    stats: Stats,
+    kind: PhantomData<K>,
+}
+
+/// One tree of lights (medium-only or after a surface bounce).
+pub struct Forest<K: ClusterKind> {
+    pub lights: Vec<K::Light>,
+    pub tree: LightTree,
+    /// Cones of the VRLs' directions per node (`--bound tight` only; empty otherwise).
+    pub cones: Vec<LineCone>,
+    pub dir_cones: Vec<DirCone>,
+    /// The tree laid out for the stochastic cut's descents (`--cut stochastic` only).
+    pub sample: SampleTree,
+}
+
+/// What one pass shares between its camera samples: the two trees and the media.
+pub struct LightcutPass<K: ClusterKind> {
+    forests: [Forest<K>; 2],
+    media: Vec<VrlMedium>,
+    light_factor: Rgb,
+    sigma_t_min: Rgb,
+    /// The phase every medium shares, if one (for the tight bound's light-side phase).
+    light_phase: Option<haze_core::Phase>,
+}
+
+impl<K: ClusterKind> LightcutsIntegrator<K> {
+    pub fn new(
+        scene: &Scene,
+        ml: ManyLightSettings,
+        settings: LightcutSettings,
+        seed: u64,
+    ) -> Result<Self, EmissionError> {
+        let paths = paths_per_pass(scene, &ml, seed)?;
+        Ok(LightcutsIntegrator { ml, settings, paths, stats: Stats::default(), kind: PhantomData })
+    }
+
+    fn build(&self, lights: Vec<K::Light>, media: &[VrlMedium], seed: u64) -> Forest<K> {
+        let summaries: Vec<LightSummary> = {
+            use rayon::prelude::*;
+            lights.par_iter().map(|l| K::summary(l, media)).collect()
+        };
+        let build = BuildSettings { seed, ..self.settings.build };
+        let tree = match self.settings.builder {
+            Builder::Agglomerative => build_agglomerative(&summaries, &build),
+            Builder::MedianSplit => build_median_split(&summaries, seed),
+        };
+        let mut forest =
+            Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new(), sample: SampleTree::default() };
+        match self.settings.strategy {
+            CutStrategy::Bound => K::prepare(&mut forest, self.settings.bound),
+            CutStrategy::Stochastic => forest.sample = SampleTree::new(&forest.tree),
+        }
+        forest
+    }
+
+    /// Mean and largest cut size per camera segment, and the fraction of segments that hit
+    /// `max_cut` (always 0 for the stochastic cut).
+    pub fn cut_statistics(&self) -> (f64, u64, f64) {
+        let segs = self.stats.segments.load(Ordering::Relaxed).max(1) as f64;
+        (
+            self.stats.cut_total.load(Ordering::Relaxed) as f64 / segs,
+            self.stats.cut_max.load(Ordering::Relaxed),
+            self.stats.hit_max.load(Ordering::Relaxed) as f64 / segs,
+        )
+    }
+
+    /// Camera segments that had a cut (per tree with lights), so far.
+    pub fn segments(&self) -> u64 {
+        self.stats.segments.load(Ordering::Relaxed)
+    }
+
+    /// Lights per pass, averaged over the passes so far.
+    pub fn lights_per_pass(&self) -> f64 {
+        self.stats.lights.load(Ordering::Relaxed) as f64
+            / self.stats.passes.load(Ordering::Relaxed).max(1) as f64
+    }
+
+    /// Seconds spent building trees, summed over passes.
+    pub fn build_seconds(&self) -> f64 {
+        self.stats.build_ns.load(Ordering::Relaxed) as f64 * 1e-9
+    }
+
+    /// Seconds spent tracing light paths, summed over passes.
+    pub fn trace_seconds(&self) -> f64 {
+        self.stats.trace_ns.load(Ordering::Relaxed) as f64 * 1e-9
+    }
+}
+
+thread_local! {
+    static CUT_SCRATCH: RefCell<CutScratch> = RefCell::new(CutScratch::default());
+    static STOCHASTIC_SCRATCH: RefCell<StochasticScratch> = RefCell::new(StochasticScratch::default());
+    /// What [`CutSizeProbe`] maps, summed, and camera segments counted on this thread since
+    /// it last reset them: the cut size (bound cut) or the largest cut node's share of the
+    /// cut's importance (stochastic cut).
+    static CUT_TALLY: std::cell::Cell<(f64, u64)> = const { std::cell::Cell::new((0.0, 0)) };
+    /// Set while [`CutSizeProbe`] renders: the stochastic cut then also computes its share.
+    static PROBING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// The deterministic cut's view of one forest and camera segment.
+struct Oracle<'a, K: ClusterKind> {
+    scene: &'a Scene,
+    forest: &'a Forest<K>,
+    cs: &'a CameraSegment,
+    media: &'a [VrlMedium],
+    bound: BoundContext,
+    key: u64,
+}
+
+impl<K: ClusterKind> ClusterOracle for Oracle<'_, K> {
+    fn bound(&self, index: u32, _node: &Node) -> f32 {
+        K::bound(&self.bound, self.forest, index)
+    }
+    fn contribution(&mut self, light: u32) -> Rgb {
+        K::contribution(self.scene, self.cs, self.media, &self.forest.lights[light as usize], self.key, light)
+    }
+}
+
+impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
+    type PassData = LightcutPass<K>;
+
+    fn name(&self) -> &str {
+        K::NAME
+    }
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
+        let t0 = Instant::now();
+        let set = trace_light_paths(scene, self.paths, seed, pass, &self.ml.trace)
+            .expect("emitters were checked when the integrator was made");
+        let media = media(scene);
+        let t1 = Instant::now();
+        let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
+        let [a, b] = K::lights(&set);
+        let n = a.len() + b.len();
+        let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
+        self.stats.trace_ns.fetch_add((t1 - t0).as_nanos() as u64, Ordering::Relaxed);
+        self.stats.build_ns.fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        self.stats.lights.fetch_add(n as u64, Ordering::Relaxed);
+        self.stats.passes.fetch_add(1, Ordering::Relaxed);
+        // Bounds on transmittance use the least extinction any connection may see; vacuum
+        // anywhere (a camera or light outside every medium) makes it zero.
+        let vacuum = scene.camera.medium.is_none()
+            || scene
+                .shapes
+                .iter()
+                .any(|s| s.is_medium_transition() && (s.interior.is_none() || s.exterior.is_none()));
+        let sigma_t_min = if vacuum {
+            Rgb::ZERO
+        } else {
+            media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| {
+                Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
+            })
+        };
+        let light_phase = media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p));
+        LightcutPass { light_factor: light_factor(&media), forests, media, sigma_t_min, light_phase }
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass<K>,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance {
+        many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
+            let forest = &pass.forests[group];
+            if forest.tree.is_empty() {
+                return Rgb::ZERO;
+            }
+            let cam_medium = &pass.media[cs.medium as usize];
+            let (value, stats) = match self.settings.strategy {
+                CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
+                    let ctx = ImportanceContext::new(cs.seg, cam_medium, pass.sigma_t_min);
+                    let importance = |n: &SampleNode| ctx.importance(n);
+                    let mut sum = Rgb::ZERO;
+                    let descent_key = key ^ (0xa5a5_5a5a_0f0f_f0f0 * (group as u64 + 1));
+                    let size = stochastic_cut(
+                        &forest.sample,
+                        &importance,
+                        &self.settings.stochastic,
+                        descent_key,
+                        scratch,
+                        |light, prob| {
+                            let l = &forest.lights[light as usize];
+                            sum += K::contribution(scene, cs, &pass.media, l, key, light) * (1.0 / prob);
+                        },
+                    );
+                    if PROBING.get() {
+                        let nodes = &forest.sample.nodes;
+                        let (mut total, mut largest) = (0.0f64, 0.0f64);
+                        for &n in scratch.cut() {
+                            let i = importance(&nodes[n as usize]) as f64;
+                            total += i;
+                            largest = largest.max(i);
+                        }
+                        let share = if total > 0.0 { largest / total } else { 1.0 };
+                        CUT_TALLY.with(|t| {
+                            let (v, n) = t.get();
+                            t.set((v + share, n + 1));
+                        });
+                    }
+                    (sum, CutStats { size, hit_max: false })
+                }),
+                CutStrategy::Bound => CUT_SCRATCH.with_borrow_mut(|scratch| {
+                    let bound = BoundContext {
+                        seg: cs.seg,
+                        camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
+                        light_factor: pass.light_factor,
+                        sigma_t_min: pass.sigma_t_min,
+                        kind: self.settings.bound,
+                        theta: self.settings.theta,
+                        camera_phase: cam_medium.phase,
+                        light_phase: pass.light_phase,
+                    };
+                    let mut o = Oracle { scene, forest, cs, media: &pass.media, bound, key };
+                    lightcut(&forest.tree, &mut o, &self.settings.cut, scratch)
+                }),
+            };
+            self.record(&stats);
+            value
+        })
+    }
+
+    fn summary(&self) -> Option<String> {
+        let passes = self.stats.passes.load(Ordering::Relaxed).max(1) as f64;
+        let (mean, max, hit) = self.cut_statistics();
+        let cut = match self.settings.strategy {
+            CutStrategy::Stochastic => format!(
+                "stochastic cut of {} nodes: mean {mean:.1} per camera segment and tree",
+                self.settings.stochastic.cut_size
+            ),
+            CutStrategy::Bound => format!(
+                "bound cut: size mean {mean:.1}, max {max}; {:.2}% of segments hit max-cut {}",
+                100.0 * hit,
+                self.settings.cut.max_cut
+            ),
+        };
+        Some(format!(
+            "{}: {} light paths and {:.0} lights per pass ({} passes); per pass: light tracing {:.3} s, tree build {:.3} s; {cut}",
+            self.name(),
+            self.paths,
+            self.lights_per_pass(),
+            passes,
+            self.trace_seconds() / passes,
+            self.build_seconds() / passes,
+        ))
+    }
+}
+
+impl<K: ClusterKind> LightcutsIntegrator<K> {
+    fn record(&self, s: &CutStats) {
+        if s.size == 0 {
+            return;
+        }
+        if self.settings.strategy == CutStrategy::Bound {
+            CUT_TALLY.with(|t| {
+                let (size, n) = t.get();
+                t.set((size + s.size as f64, n + 1));
+            });
+        }
+        self.stats.segments.fetch_add(1, Ordering::Relaxed);
+        self.stats.cut_total.fetch_add(s.size as u64, Ordering::Relaxed);
+        self.stats.cut_max.fetch_max(s.size as u64, Ordering::Relaxed);
+        if s.hit_max {
+            self.stats.hit_max.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+/// Renders, instead of a camera path's radiance, the mean over its segments of the cut size
+/// (bound cut) or of the largest cut node's share of the cut's importance (stochastic cut: 1
+/// where one cluster dominates, `1/k` where the importance spreads evenly), in every channel of
+/// the `emitted` component (0 where the path meets no medium). Runs the wrapped
+/// integrator unchanged, so the cuts are those of the image with the same seed and pass.
+pub struct CutSizeProbe<'a, K: ClusterKind>(pub &'a LightcutsIntegrator<K>);
+
+impl<K: ClusterKind> Integrator for CutSizeProbe<'_, K> {
+    type PassData = LightcutPass<K>;
+
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
+        self.0.begin_pass(scene, seed, pass)
+    }
+
+    fn radiance(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass<K>,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+    ) -> PathRadiance {
+        CUT_TALLY.with(|t| t.set((0.0, 0)));
+        PROBING.set(true);
+        let _ = self.0.radiance(scene, pass, ray, medium, sampler);
+        PROBING.set(false);
+        let (size, n) = CUT_TALLY.with(|t| t.get());
+        let mut r = PathRadiance::default();
+        if n > 0 {
+            r.add(haze_render::Component::Emitted, Rgb::splat(size as f32 / n as f32));
+        }
+        r
+    }
+}
