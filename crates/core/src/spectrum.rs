@@ -41,8 +41,15 @@ impl Rgb {
         self.0.iter().all(|c| c.is_finite())
     }
     /// `exp(-self * d)` channel by channel: transmittance for extinction `self` over distance `d`.
+    /// Grey extinction (equal channels, the common case) takes one `exp`: the same values.
+    #[inline]
     pub fn exp_neg(self, d: f32) -> Self {
-        self.map(|s| (-s * d).exp())
+        let [r, g, b] = self.0;
+        if r == g && g == b {
+            Rgb::splat((-r * d).exp())
+        } else {
+            self.map(|s| (-s * d).exp())
+        }
     }
 }
 

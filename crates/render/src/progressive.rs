@@ -4,6 +4,13 @@
 //! Reproducibility: the sampler of pixel `i` in pass `k` is `Sampler::new(seed, i, k)`, and each
 //! pixel is accumulated by exactly one task in a fixed order, so the same seed and settings give
 //! a bit-identical image for any thread count.
+//!
+//! Passes run in rounds: one parallel sweep over the film renders several consecutive passes
+//! (every pixel its samples of pass `k`, then of `k + 1`, ...), so the accumulation order of each
+//! pixel, and the image, are those of one pass per sweep. Integrators without per-pass data
+//! (`Integrator::passes_batchable`) grow their rounds to about 75 ms of wall time, which removes
+//! the per-pass cost of `spp_per_pass = 1`; the number of passes still depends only on `spp` and
+//! `spp_per_pass`, and cancellation and time budgets stop at a round's end (a pass boundary).
 
 use crate::components::PathRadiance;
 use crate::film::Film;
@@ -43,7 +50,23 @@ impl Default for RenderSettings {
     }
 }
 
-/// Progress after each pass.
+/// Wall time a round of passes aims at: long enough that the per-round sweep costs nothing, short
+/// enough that Ctrl-C and time budgets react quickly.
+const ROUND_SECONDS: f64 = 0.075;
+
+/// Passes in the next round, from the last round's `passes` taking `took`: aimed at
+/// [`ROUND_SECONDS`], growing at most fourfold per round, never past a time budget's end.
+fn next_round(round: u64, passes: u64, took: Duration, limit: Option<Duration>, elapsed: Duration) -> u64 {
+    let per_pass = took.as_secs_f64() / passes.max(1) as f64;
+    let mut aim = ROUND_SECONDS;
+    if let Some(limit) = limit {
+        aim = aim.min((limit.saturating_sub(elapsed)).as_secs_f64());
+    }
+    let want = if per_pass > 0.0 { (aim / per_pass).floor() } else { f64::INFINITY };
+    (want.min((round * 4) as f64).max(1.0)) as u64
+}
+
+/// Progress after each round of passes.
 #[derive(Clone, Debug)]
 pub struct PassReport {
     pub passes: u32,
@@ -80,9 +103,18 @@ pub fn render<I: Integrator>(
     let mut passes = 0u32;
     let mut interrupted = false;
 
+    // Passes per round: every pass keeps its own sampler key `(seed, pixel, pass)` and each pixel
+    // accumulates its samples in pass order, so how passes are grouped into rounds changes no
+    // bit of the image; rounds only amortise the per-pass cost (a parallel sweep over the film,
+    // its tail where one thread waits for the other) for integrators without per-pass data.
+    // Rounds grow until they take about `ROUND_SECONDS` of wall time.
+    let batchable = integrator.passes_batchable();
+    let rays = cam.ray_generator();
+    let mut round = 1u64;
     loop {
         let done = film.samples;
-        let budget_left = settings.time_limit.is_none_or(|t| start.elapsed() < t);
+        let elapsed = start.elapsed();
+        let budget_left = settings.time_limit.is_none_or(|t| elapsed < t);
         let target_left = settings.time_limit.is_some() && settings.spp == 0 || done < settings.spp as u64;
         if !budget_left || !target_left {
             break;
@@ -91,34 +123,59 @@ pub fn render<I: Integrator>(
             interrupted = true;
             break;
         }
-        let n_this = if settings.spp > 0 {
-            (settings.spp as u64 - done).min(spp_per_pass as u64)
-        } else {
-            spp_per_pass as u64
-        };
-        let pass = settings.first_pass + passes;
-        let data = integrator.begin_pass(scene, settings.seed, pass);
+        // The passes of this round: their sample counts depend only on `spp`, `spp_per_pass` and
+        // the pass index, never on timing.
+        let mut counts = Vec::new();
+        let mut planned = done;
+        while (counts.len() as u64) < round {
+            if settings.spp > 0 && planned >= settings.spp as u64 {
+                break;
+            }
+            let n = if settings.spp > 0 {
+                (settings.spp as u64 - planned).min(spp_per_pass as u64)
+            } else {
+                spp_per_pass as u64
+            };
+            counts.push(n);
+            planned += n;
+        }
+        let first = settings.first_pass + passes;
+        let data: Vec<I::PassData> = (0..counts.len() as u32)
+            .map(|k| integrator.begin_pass(scene, settings.seed, first + k))
+            .collect();
+        let t_round = Instant::now();
         film.data_mut().par_chunks_mut(stride * w).enumerate().for_each(|(y, row)| {
             for (x, slot) in row.chunks_mut(stride).enumerate() {
                 let pixel = (y * w + x) as u64;
-                let mut sampler = Sampler::new(settings.seed, pixel, pass as u64);
-                for _ in 0..n_this {
-                    // The reconstruction filter by importance sampling (see `PixelFilter`).
-                    let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
-                    let ray = cam.generate_ray(pos);
-                    let mut r = integrator.radiance(scene, &data, ray, cam.medium, &mut sampler);
-                    if !r.total().is_finite() {
-                        invalid.fetch_add(1, Ordering::Relaxed);
-                        r = PathRadiance::default();
+                for (k, (&n_this, data)) in counts.iter().zip(&data).enumerate() {
+                    let mut sampler = Sampler::new(settings.seed, pixel, (first + k as u32) as u64);
+                    for _ in 0..n_this {
+                        // The reconstruction filter by importance sampling (see `PixelFilter`).
+                        let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
+                        let ray = rays.generate(pos);
+                        let mut r = integrator.radiance(scene, data, ray, cam.medium, &mut sampler);
+                        if !r.total().is_finite() {
+                            invalid.fetch_add(1, Ordering::Relaxed);
+                            r = PathRadiance::default();
+                        }
+                        Film::add_sample(slot, &r);
                     }
-                    Film::add_sample(slot, &r);
                 }
             }
         });
         debug_assert_eq!(h * w * stride, film.data_mut().len());
-        film.samples += n_this;
-        passes += 1;
+        film.samples = planned;
+        passes += counts.len() as u32;
         on_pass(&PassReport { passes, spp_done: film.samples, elapsed: start.elapsed() });
+        if batchable {
+            round = next_round(
+                round,
+                counts.len() as u64,
+                t_round.elapsed(),
+                settings.time_limit,
+                start.elapsed(),
+            );
+        }
     }
 
     RenderOutput {

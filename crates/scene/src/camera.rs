@@ -128,23 +128,48 @@ impl Camera {
     /// Primary ray through the film position `p` in pixel units (`[0, width) x [0, height)`).
     /// The ray starts at the near clip plane and ends at the far clip plane, as in Mitsuba.
     pub fn generate_ray(&self, p: Vec2) -> Ray {
+        self.ray_generator().generate(p)
+    }
+
+    /// [`Self::generate_ray`] with the per-camera constants (a `tan`, the origin) computed once,
+    /// for the render loop: the same rays bit for bit.
+    pub fn ray_generator(&self) -> RayGenerator<'_> {
         let tan_x = (0.5 * self.fov_x_deg.to_radians()).tan();
-        let tan_y = tan_x * self.height as f32 / self.width as f32;
-        let sx = 1.0 - 2.0 * p.x / self.width as f32;
-        let sy = 1.0 - 2.0 * p.y / self.height as f32;
-        let local = Vec3::new(sx * tan_x, sy * tan_y, 1.0);
-        let inv_len = 1.0 / local.length();
-        let d_local = local * inv_len;
-        let o = self.to_world.transform_point3(Vec3::ZERO);
-        let d = self.to_world.transform_vector3(d_local).normalize();
-        // Near/far clips are distances along the camera's z axis.
-        let t_near = self.near_clip / d_local.z;
-        let t_far = self.far_clip / d_local.z;
-        Ray { o: o + d * t_near, d, t_max: t_far - t_near }
+        RayGenerator {
+            cam: self,
+            tan_x,
+            tan_y: tan_x * self.height as f32 / self.width as f32,
+            o: self.to_world.transform_point3(Vec3::ZERO),
+        }
     }
 
     pub fn position(&self) -> Vec3 {
         self.to_world.transform_point3(Vec3::ZERO)
+    }
+}
+
+/// Primary rays of a camera (see [`Camera::ray_generator`]).
+pub struct RayGenerator<'a> {
+    cam: &'a Camera,
+    tan_x: f32,
+    tan_y: f32,
+    o: Vec3,
+}
+
+impl RayGenerator<'_> {
+    #[inline]
+    pub fn generate(&self, p: Vec2) -> Ray {
+        let cam = self.cam;
+        let sx = 1.0 - 2.0 * p.x / cam.width as f32;
+        let sy = 1.0 - 2.0 * p.y / cam.height as f32;
+        let local = Vec3::new(sx * self.tan_x, sy * self.tan_y, 1.0);
+        let inv_len = 1.0 / local.length();
+        let d_local = local * inv_len;
+        let d = cam.to_world.transform_vector3(d_local).normalize();
+        // Near/far clips are distances along the camera's z axis.
+        let t_near = cam.near_clip / d_local.z;
+        let t_far = cam.far_clip / d_local.z;
+        Ray { o: self.o + d * t_near, d, t_max: t_far - t_near }
     }
 }
 

@@ -1,7 +1,7 @@
 //! The scene the integrators render: camera, shapes, media, emitters, integrator settings, and
 //! ray queries through the acceleration structure.
 
-use crate::accel::Accel;
+use crate::accel::{Accel, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::emitter_tables::EmitterTables;
@@ -98,6 +98,17 @@ impl Scene {
     /// True if anything blocks `ray` before `ray.t_max`.
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(ray)
+    }
+
+    /// One BVH traversal for a shadow ray: blocked, or the pass-through surfaces on it
+    /// (unordered; see `Accel::shadow_hits`).
+    pub fn shadow_hits(&self, ray: &Ray, hits: &mut [ShadowHit; MAX_SHADOW_HITS]) -> ShadowQuery {
+        self.accel.shadow_hits(&self.shapes, ray, hits)
+    }
+
+    /// The surface interaction of a hit from [`Self::shadow_hits`].
+    pub fn shadow_interaction(&self, hit: &ShadowHit) -> SurfaceInteraction {
+        self.accel.shadow_interaction(&self.shapes, hit)
     }
 
     pub fn medium(&self, id: MediumId) -> &Medium {

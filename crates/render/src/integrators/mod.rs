@@ -20,6 +20,14 @@ pub trait Integrator: Sync {
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> Self::PassData;
 
+    /// True if several passes may run in one parallel sweep over the film (a "round", see
+    /// `progressive::render`), each with its own `begin_pass` data held at the same time. The
+    /// image is the same either way; rounds only save per-pass overhead. Integrators whose pass
+    /// data is large or costly (traced light sets) keep one pass per round.
+    fn passes_batchable(&self) -> bool {
+        false
+    }
+
     /// A line of statistics for the user after rendering (e.g. how many lights were made).
     fn summary(&self) -> Option<String> {
         None

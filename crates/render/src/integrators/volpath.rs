@@ -48,6 +48,10 @@ impl Integrator for VolPath {
 
     fn begin_pass(&self, _scene: &Scene, _seed: u64, _pass: u32) {}
 
+    fn passes_batchable(&self) -> bool {
+        true
+    }
+
     fn radiance(
         &self,
         scene: &Scene,

@@ -22,7 +22,7 @@
 
 mod watertight;
 
-pub use watertight::WatertightRay;
+pub use watertight::{TriSoa, WatertightRay};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
@@ -31,7 +31,7 @@ use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
-use obvhs::ray::Ray as BvhRay;
+use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
@@ -54,9 +54,37 @@ pub const MAX_COORDINATE: f32 = 1e12;
 /// A triangle in BVH leaf order with the shape and primitive it came from.
 #[derive(Clone, Copy, Debug)]
 struct TriRef {
-    v: [Vec3A; 3],
+    /// The vertices, transposed for [`WatertightRay::intersect_soa`].
+    v: TriSoa,
     shape: u32,
     prim: u32,
+    /// The shape stops shadow rays (neither `null` nor a thin dielectric, see
+    /// [`Accel::shadow_hits`]).
+    blocks: bool,
+}
+
+/// A surface a shadow ray passes through (see [`Accel::shadow_hits`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ShadowHit {
+    pub t: f32,
+    tri: u32,
+    b1: f32,
+    b2: f32,
+}
+
+/// Most pass-through surfaces [`Accel::shadow_hits`] collects before it gives up.
+pub const MAX_SHADOW_HITS: usize = 8;
+
+/// Outcome of [`Accel::shadow_hits`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowQuery {
+    /// A blocking surface lies on the ray (the traversal stopped at the first one found).
+    Blocked,
+    /// Nothing blocks; this many pass-through hits were stored, in no particular order.
+    Clear(usize),
+    /// The ray needs the general answer: more than [`MAX_SHADOW_HITS`] pass-through surfaces,
+    /// or an analytic shape that does not block (its second intersection is not collected).
+    Unsupported,
 }
 
 #[derive(Clone, Debug)]
@@ -105,6 +133,17 @@ pub struct Accel {
     hi: Vec3,
 }
 
+/// BVH build settings: obvhs' `slow_build` (wider PLOC search, more reinsertion: a tree that
+/// traverses faster) up to a million triangles, where it builds in well under a second, and
+/// `medium_build` above. Without pre-splitting in both: a split triangle would sit in several
+/// leaves, and [`Accel::shadow_hits`] must see each surface once.
+fn build_params(triangles: usize) -> BvhBuildParams {
+    let mut p =
+        if triangles <= 1_000_000 { BvhBuildParams::slow_build() } else { BvhBuildParams::medium_build() };
+    p.pre_split = false;
+    p
+}
+
 impl Accel {
     pub fn build(shapes: &[Shape]) -> Self {
         let mut flat = Vec::new();
@@ -122,9 +161,10 @@ impl Accel {
                         }
                         flat.push(Triangle { v0: a.into(), v1: b.into(), v2: c.into() });
                         refs.push(TriRef {
-                            v: [a.into(), b.into(), c.into()],
+                            v: TriSoa::new(a.into(), b.into(), c.into()),
                             shape: si as u32,
                             prim: i as u32,
+                            blocks: s.blocks_shadow_rays(),
                         });
                     }
                 }
@@ -171,7 +211,7 @@ impl Accel {
                     Aabb::new(b.min - pad, b.max + pad)
                 })
                 .collect();
-            let bvh = build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
+            let bvh = build_cwbvh(&boxes, build_params(flat.len()), &mut Default::default());
             let tris = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
             (Some(bvh), tris)
         };
@@ -195,11 +235,10 @@ impl Accel {
             // the shifted distances, for pruning.
             let mut closest: Option<(usize, f32, f32, f32)> = None;
             let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(t_max));
-            let mut hit = obvhs::ray::RayHit::none();
+            let mut hit = RayHit::none();
             bvh.ray_traverse(r, &mut hit, |_, i| {
-                let v = &self.tris[i].v;
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                match wt.intersect(v[0], v[1], v[2], T_MIN, t_max) {
+                match wt.intersect_soa(&self.tris[i].v, T_MIN, t_max) {
                     Some((t, b1, b2)) => {
                         t_max = t;
                         closest = Some((i, t, b1, b2));
@@ -262,7 +301,7 @@ impl Accel {
             unreachable!("triangles come from meshes")
         };
         let b0 = 1.0 - b1 - b2;
-        let [v0, v1, v2] = tri.v.map(Vec3::from);
+        let [v0, v1, v2] = [0, 1, 2].map(|i| Vec3::from(tri.v.vertex(i)));
         // Barycentric interpolation is more precise than o + t d far from the origin.
         let p = pull_inside(v0 * b0 + v1 * b1 + v2 * b2, [v0, v1, v2]);
         let n = m.face_normal(tri.prim as usize);
@@ -294,9 +333,8 @@ impl Accel {
             let mut blocked = false;
             let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
             bvh.ray_traverse_miss(r, |_, i| {
-                let v = &self.tris[i].v;
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                if wt.intersect(v[0], v[1], v[2], T_MIN, ray.t_max).is_some() {
+                if wt.intersect_soa(&self.tris[i].v, T_MIN, ray.t_max).is_some() {
                     blocked = true;
                     // Below any tmax: obvhs stops at the first hit.
                     f32::NEG_INFINITY
@@ -312,6 +350,67 @@ impl Accel {
             Analytic::Sphere { center, radius, .. } => intersect_sphere(ray, *center, *radius).is_some(),
             Analytic::Disk { to_world, inv, .. } => intersect_disk(ray, to_world, inv).is_some(),
         })
+    }
+
+    /// One traversal for a shadow ray: stops at the first blocking surface (any hit, in whatever
+    /// order the BVH meets it), otherwise stores every pass-through surface (`null`, thin
+    /// dielectric) within `(0, ray.t_max)` in `hits`. With the surfaces in `t` order, a shadow
+    /// ray through null boundaries then costs one traversal instead of one per boundary.
+    pub fn shadow_hits(
+        &self,
+        shapes: &[Shape],
+        ray: &Ray,
+        hits: &mut [ShadowHit; MAX_SHADOW_HITS],
+    ) -> ShadowQuery {
+        for a in &self.analytic {
+            let (shape, t) = match a {
+                Analytic::Sphere { shape, center, radius, .. } => {
+                    (*shape, intersect_sphere(ray, *center, *radius))
+                }
+                Analytic::Disk { shape, to_world, inv, .. } => {
+                    (*shape, intersect_disk(ray, to_world, inv).map(|h| h.0))
+                }
+            };
+            if !shapes[shape as usize].blocks_shadow_rays() {
+                return ShadowQuery::Unsupported;
+            }
+            if t.is_some() {
+                return ShadowQuery::Blocked;
+            }
+        }
+        let Some(bvh) = &self.bvh else { return ShadowQuery::Clear(0) };
+        let o: Vec3A = ray.o.into();
+        let d: Vec3A = ray.d.into();
+        let mut wt: Option<WatertightRay> = None;
+        let (mut n, mut overflow) = (0usize, false);
+        let mut blocked = false;
+        // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
+        // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
+        let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
+        bvh.ray_traverse_miss(r, |_, i| {
+            let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+            let tri = &self.tris[i];
+            let Some((t, b1, b2)) = wt.intersect_soa(&tri.v, T_MIN, ray.t_max) else { return f32::INFINITY };
+            if tri.blocks || n == MAX_SHADOW_HITS {
+                overflow = !tri.blocks;
+                blocked = true;
+                // Below any tmax: obvhs stops at the first hit.
+                return f32::NEG_INFINITY;
+            }
+            hits[n] = ShadowHit { t, tri: i as u32, b1, b2 };
+            n += 1;
+            f32::INFINITY
+        });
+        match (blocked, overflow) {
+            (false, _) => ShadowQuery::Clear(n),
+            (true, false) => ShadowQuery::Blocked,
+            (true, true) => ShadowQuery::Unsupported,
+        }
+    }
+
+    /// The surface interaction of a hit from [`Self::shadow_hits`].
+    pub fn shadow_interaction(&self, shapes: &[Shape], h: &ShadowHit) -> SurfaceInteraction {
+        self.triangle_interaction(shapes, &self.tris[h.tri as usize], h.t, h.b1, h.b2)
     }
 }
 
@@ -329,10 +428,17 @@ mod tests {
     /// The BVH agrees with a brute-force loop over all triangles on random rays.
     #[test]
     fn bvh_matches_brute_force() {
+        // A deep tree and a tree of a few leaves.
+        for (count, scale) in [(2000, 10.0), (30, 2.0)] {
+            bvh_matches_brute_force_with(count, scale);
+        }
+    }
+
+    fn bvh_matches_brute_force_with(count: usize, scale: f32) {
         let mut s = Sampler::from_seed(1);
         let mut tris = Vec::new();
-        for _ in 0..2000 {
-            let c = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+        for _ in 0..count {
+            let c = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * scale;
             let e = |s: &mut Sampler| Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5);
             tris.push([c + e(&mut s), c + e(&mut s), c + e(&mut s)]);
         }
@@ -341,7 +447,7 @@ mod tests {
         let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
         let accel = Accel::build(&shapes);
         for _ in 0..2000 {
-            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * scale;
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
             let ray = Ray::new(o, d);
             let wt = WatertightRay::new(o.into(), d.into());

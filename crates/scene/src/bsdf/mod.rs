@@ -158,6 +158,15 @@ impl Bsdf {
     /// The fraction of light that goes straight through the surface along `-wi` (Mitsuba's
     /// `eval_null_transmission`), for shadow rays: 1 for `null`, the summed transmittance
     /// `1 - R'` for `thindielectric`, 0 for every surface that blocks.
+    /// True if [`Self::null_transmission`] can be non-zero (shadow rays cross the surface).
+    pub fn transmits_null(&self) -> bool {
+        match self {
+            Bsdf::Null | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::TwoSided(b) => b.transmits_null(),
+            _ => false,
+        }
+    }
+
     // `uv` belongs to the interface (a textured thin sheet would use it); today only `twosided`
     // passes it on.
     #[allow(clippy::only_used_in_recursion)]

@@ -47,6 +47,12 @@ pub struct Shape {
 }
 
 impl Shape {
+    /// True if the shape stops shadow rays: light crosses `null` surfaces and thin dielectrics
+    /// (`Bsdf::null_transmission`), nothing else.
+    pub fn blocks_shadow_rays(&self) -> bool {
+        !self.bsdf.transmits_null()
+    }
+
     /// True if crossing this shape can change the current medium (Mitsuba 3 changes media only
     /// at shapes that declare an interior or exterior medium).
     pub fn is_medium_transition(&self) -> bool {
