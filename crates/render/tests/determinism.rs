@@ -6,13 +6,10 @@ use haze_render::components::PathRadiance;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Integrator, VolPath};
 use haze_scene::{load_file, LoadOptions, MediumId, Scene};
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 fn load(name: &str) -> Scene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/validation/scenes")
-        .join(format!("{name}.xml"));
+    let path = haze_testkit::data::validation_scene(name);
     let mut scene = load_file(&path, &LoadOptions::default()).expect("validation scene loads");
     // A smaller film: the property does not depend on the size.
     scene.camera.width = 32;
