@@ -400,72 +400,105 @@ fn bench_volpath(options: &Options, scenes: &[PathBuf]) -> Result<()> {
 
 /// Seconds of one frame at 1 spp with `integ`: its per-pass light tracing and tree build included,
 /// its construction (the pilot light-tracing run) not.
-/// The stochastic cut's cost per camera segment against the number of VRLs: one pass of
-/// `--spp` samples per pixel sharing one light set, for 10k, 100k, ... `--max-vrls` VRLs and
-/// seeds 0, 1, 2; light tracing and tree build are timed apart from the gather (cuts, descents
-/// and light evaluations), whose time per camera segment should hardly grow with N.
+/// The stochastic cut's cost per camera segment against the number of VRLs. One pass (light
+/// set and trees) is prepared for each of 10k, 100k, ... `--max-vrls` VRLs; then, in rounds,
+/// the gather of `--spp` samples per pixel (cuts, descents, light evaluations, and the camera
+/// rays and single scattering they share: everything but light tracing and the build) is timed
+/// on each pass in turn, so every round measures all light counts under the same machine load.
+/// The table gives the median over rounds and the ratio to the first row per round (median,
+/// and its spread): the "within 2x from 10k to 10M" is that ratio.
 fn bench_stochastic(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
     use haze_manylight::integrators::{LightcutsIntegrator, Vrls};
     if args.vrls.is_some() || args.max_cut.is_some() || args.bound.is_some() {
         anyhow::bail!("haze bench --integrator stochastic takes --spp, --cut-size and --max-vrls (the VRL counts are 10k, 100k, ...)");
     }
-    let mut given = vec![("spp", args.spp.as_deref().unwrap_or("4"))];
+    let mut given = vec![("spp", args.spp.as_deref().unwrap_or("16"))];
     if let Some(k) = args.cut_size.as_deref() {
         given.push(("cut_size", k));
     }
     let options = options::resolve(MethodKind::VrlLightcuts, &given, Spelling::Flag)?;
-    let (spp, cut_size) = (options.spp.unwrap_or(4), options.method.lightcuts.stochastic.cut_size);
+    let (spp, cut_size) = (options.spp.unwrap_or(16), options.method.lightcuts.stochastic.cut_size);
+    const ROUNDS: usize = 5;
     for path in scenes {
         let scene = load_scene(path, &args.define)?;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let trace = LightTraceSettings::from_max_depth(scene.integrator.max_depth);
         let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
         println!(
-            "\n### {file}: stochastic cut of {} nodes, {}x{} at {} spp in one pass, seeds 0-2 (load average {})\n",
+            "\n### {file}: stochastic cut of {} nodes, {}x{} at {} spp sharing one pass, {ROUNDS} interleaved rounds (load average {})\n",
             cut_size,
             scene.camera.width,
             scene.camera.height,
             spp,
             load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
         );
-        println!("| VRLs | trace s | build s | gather s (min-max over seeds) | gather ns per segment | vs first row |");
-        println!("|---|---|---|---|---|---|");
-        let mut first = None;
+        let mut prepared = Vec::new();
         let mut n = 10_000u64;
         while n <= args.max_vrls {
-            let mut rows = Vec::new();
-            for seed in 0..3u64 {
-                let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
-                let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, options.method.lightcuts, seed)?;
-                let settings = RenderSettings { spp, spp_per_pass: spp, seed, ..Default::default() };
-                let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
-                let (t, b) = (integ.trace_seconds(), integ.build_seconds());
-                let gather = (out.elapsed.as_secs_f64() - t - b).max(0.0);
-                rows.push((
-                    integ.lights_per_pass(),
-                    t,
-                    b,
-                    gather,
-                    gather * 1e9 / integ.segments().max(1) as f64,
-                ));
-            }
-            let mean = |f: fn(&(f64, f64, f64, f64, f64)) -> f64| rows.iter().map(f).sum::<f64>() / 3.0;
-            let (lo, hi) =
-                rows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r.3), hi.max(r.3)));
-            let per_seg = mean(|r| r.4);
-            let base = *first.get_or_insert(per_seg);
-            println!(
-                "| {:.0} | {:.2} | {:.2} | {:.2} ({lo:.2}-{hi:.2}) | {per_seg:.0} | {:.2} |",
-                mean(|r| r.0),
-                mean(|r| r.1),
-                mean(|r| r.2),
-                mean(|r| r.3),
-                per_seg / base
-            );
+            let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+            let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, options.method.lightcuts, 0)?;
+            let data = integ.begin_pass(&scene, 0, 0);
+            prepared.push((integ, data));
             n *= 10;
+        }
+        // times[row][round]: gather seconds per camera segment.
+        let mut times = vec![Vec::new(); prepared.len()];
+        for round in 0..ROUNDS {
+            for (row, (integ, data)) in prepared.iter().enumerate() {
+                let before = integ.segments();
+                let t = Instant::now();
+                gather(&scene, integ, data, spp, round as u64);
+                let secs = t.elapsed().as_secs_f64();
+                times[row].push(secs / (integ.segments() - before).max(1) as f64);
+            }
+        }
+        println!("| VRLs | trace s | build s | gather ns per segment (median; min-max) | vs first row (median; min-max over rounds) |");
+        println!("|---|---|---|---|---|");
+        for (row, (integ, _)) in prepared.iter().enumerate() {
+            let ns: Vec<f64> = times[row].iter().map(|t| t * 1e9).collect();
+            let ratios: Vec<f64> = (0..ROUNDS).map(|r| times[row][r] / times[0][r]).collect();
+            let (m, lo, hi) = spread(&ns);
+            let (rm, rlo, rhi) = spread(&ratios);
+            println!(
+                "| {:.0} | {:.2} | {:.2} | {m:.0} ({lo:.0}-{hi:.0}) | {rm:.2} ({rlo:.2}-{rhi:.2}) |",
+                integ.lights_per_pass(),
+                integ.trace_seconds(),
+                integ.build_seconds(),
+            );
         }
     }
     Ok(())
+}
+
+/// Median, least and largest of `v`.
+fn spread(v: &[f64]) -> (f64, f64, f64) {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    (s[s.len() / 2], s[0], s[s.len() - 1])
+}
+
+/// The gather of one pass: `spp` camera samples per pixel through `data`, rows in parallel as
+/// `render` does (the sums are discarded).
+fn gather<I: Integrator>(scene: &haze_scene::Scene, integ: &I, data: &I::PassData, spp: u32, round: u64) {
+    use haze_core::Sampler;
+    use rayon::prelude::*;
+    let cam = &scene.camera;
+    let rays = cam.ray_generator();
+    let total: f64 = (0..cam.height)
+        .into_par_iter()
+        .map(|y| {
+            let mut sum = 0.0f64;
+            for x in 0..cam.width {
+                let mut sampler = Sampler::new(round, (y * cam.width + x) as u64, 0);
+                for _ in 0..spp {
+                    let ray = rays.generate(cam.sample_film_position(x, y, &mut sampler));
+                    sum += integ.radiance(scene, data, ray, cam.medium, &mut sampler).total().mean() as f64;
+                }
+            }
+            sum
+        })
+        .sum();
+    std::hint::black_box(total);
 }
 
 fn frame_seconds(scene: &haze_scene::Scene, integ: &impl Integrator) -> f64 {

@@ -8,6 +8,7 @@
 pub mod camera;
 pub mod integrators;
 pub mod lighttrace;
+mod memory;
 pub mod single;
 pub mod tree;
 pub mod vpl;

@@ -65,7 +65,7 @@ fn random_segment(s: &mut Sampler, k: usize) -> Segment {
 }
 
 fn leaves_below(tree: &SampleTree, node: u32, out: &mut Vec<u32>) {
-    let n = &tree.nodes[node as usize];
+    let n = tree.node(node);
     if n.is_leaf() {
         out.push(n.light());
     } else {
@@ -190,7 +190,7 @@ fn unbiasedness(settings: StochasticSettings, misstate: bool) -> (usize, f64) {
     let tree = tree_of(&vrls, false, 42);
     let left = {
         let mut below = Vec::new();
-        leaves_below(&tree, tree.nodes[0].children()[0], &mut below);
+        leaves_below(&tree, tree.node(0).children()[0], &mut below);
         let mut m = vec![false; vrls.len()];
         for l in below {
             m[l as usize] = true;

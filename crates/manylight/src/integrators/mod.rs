@@ -186,13 +186,16 @@ impl PassTracer {
     }
 }
 
-/// Splits light records into the two groups of [`many_light_radiance`].
+/// Splits light records into the two groups of [`many_light_radiance`] (in huge pages: the
+/// gather reads them at random, `crate::memory`).
 pub(crate) fn split_groups<R, L>(
     records: &[R],
     after_surface: impl Fn(&R) -> bool,
     make: impl Fn(&R) -> L,
 ) -> [Vec<L>; 2] {
-    let mut groups = [Vec::new(), Vec::new()];
+    let second = records.iter().filter(|r| after_surface(r)).count();
+    let mut groups =
+        [crate::memory::huge_page_vec(records.len() - second), crate::memory::huge_page_vec(second)];
     for r in records {
         groups[after_surface(r) as usize].push(make(r));
     }

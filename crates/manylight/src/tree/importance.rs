@@ -120,7 +120,7 @@ mod tests {
             length: 0.0,
             power: Rgb::splat(power),
         };
-        SampleTree::new(&build_median_split(&[light], 0)).nodes[0]
+        *SampleTree::new(&build_median_split(&[light], 0)).node(0)
     }
 
     fn context(g: f32) -> ImportanceContext {

@@ -56,8 +56,8 @@ pub struct SampleNode {
     pub radius: f32,
     /// Summed [`super::TreeLight::power`] of the lights below.
     pub power: Rgb,
-    /// Inner node: index of the left child, the right child is next to it. Leaf: the light's
-    /// index with [`LEAF`] set.
+    /// Inner node: index of the left child, the right child is next to it (the two share one
+    /// cache line). Leaf: the light's index with [`LEAF`] set.
     link: u32,
 }
 
@@ -78,13 +78,35 @@ impl SampleNode {
     }
 }
 
-/// A [`LightTree`] laid out for the descents: 32-byte nodes in depth-first order, the root at
-/// 0 and both children of a node side by side, so one descent step reads one or two cache
-/// lines instead of two 72-byte nodes anywhere in memory (the cost per level then hardly
-/// depends on the tree's size: docs/lightcuts.md, scaling table).
+/// Two sibling nodes in one 64-byte cache line: a descent step reads exactly one line.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct NodePair([SampleNode; 2]);
+
+/// Node pairs per block: a node's children, then the children of each (two levels, 192 bytes).
+const BLOCK: usize = 3;
+/// Block levels per treelet: `1 + 4 + 16 = 21` blocks, 4032 bytes, one 4 KiB page.
+const TREELET_LEVELS: usize = 3;
+
+/// A [`LightTree`] laid out for the descents (docs/lightcuts.md, "Cost per camera segment").
+///
+/// - 32-byte nodes, siblings side by side in one aligned 64-byte line ([`NodePair`]); node ids
+///   are `2 * pair + side`, the root is node 0, alone in pair 0.
+/// - **Blocks of two levels**: below an inner node `X` the three pairs `X`'s children,
+///   `X.left`'s children and `X.right`'s children are stored consecutively (a leaf child's
+///   pair is left empty). A descent prefetches the whole block as soon as it knows `X`, so it
+///   waits for memory once per two levels instead of once per level.
+/// - **Treelets**: three levels of blocks (six levels of the tree) below a node lie together,
+///   breadth first, in one 4 KiB page, so a descent through `L` levels touches about `L / 6`
+///   pages.
+/// - On Linux the array asks for transparent huge pages (`crate::memory`).
+///
+/// Once the tree outgrows the caches a descent's cost is memory latency; these choices cut the
+/// number of round trips it waits for. The tree is the same binary tree as before: only the
+/// layout changed, so the probabilities do not.
 #[derive(Clone, Debug, Default)]
 pub struct SampleTree {
-    pub nodes: Vec<SampleNode>,
+    pairs: Vec<NodePair>,
 }
 
 impl SampleTree {
@@ -102,26 +124,78 @@ impl SampleTree {
                 link: if n.is_leaf() { n.rep | LEAF } else { 0 },
             }
         };
-        let mut nodes = Vec::with_capacity(tree.nodes.len());
-        nodes.push(of(tree.root));
-        let mut stack = vec![(tree.root, 0u32)];
-        while let Some((src, dst)) = stack.pop() {
-            let n = &tree.nodes[src as usize];
-            if n.is_leaf() {
+        let inner = |i: u32| !tree.nodes[i as usize].is_leaf();
+        let empty =
+            NodePair([SampleNode { center: Vec3::ZERO, radius: 0.0, power: Rgb::ZERO, link: LEAF }; 2]);
+        // A block per inner node whose parent's block does not hold its children: about
+        // `leaves / 2` blocks of three pairs, plus pair 0.
+        let leaves = tree.nodes.iter().filter(|n| n.is_leaf()).count();
+        let mut pairs = crate::memory::huge_page_vec::<NodePair>(1 + BLOCK * (leaves / 2 + 1));
+        let root = of(tree.root);
+        pairs.push(NodePair([root, empty.0[0]]));
+        // (source node, destination node id) of treelet roots still to lay out.
+        let mut treelets = vec![(tree.root, 0u32)];
+        let (mut level, mut next) = (Vec::new(), Vec::new());
+        let set_link = |pairs: &mut Vec<NodePair>, id: u32, link: u32| {
+            pairs[(id >> 1) as usize].0[(id & 1) as usize].link = link;
+        };
+        while let Some(top) = treelets.pop() {
+            if !inner(top.0) {
                 continue;
             }
-            let k = nodes.len() as u32;
-            nodes[dst as usize].link = k;
-            nodes.push(of(n.left));
-            nodes.push(of(n.right));
-            stack.push((n.right, k + 1));
-            stack.push((n.left, k));
+            level.clear();
+            level.push(top);
+            for _ in 0..TREELET_LEVELS {
+                next.clear();
+                for &(src, dst) in &level {
+                    // The block of `src`: its children, then each child's children.
+                    let n = &tree.nodes[src as usize];
+                    let b = pairs.len() as u32;
+                    set_link(&mut pairs, dst, 2 * b);
+                    pairs.push(NodePair([of(n.left), of(n.right)]));
+                    for (side, child) in [n.left, n.right].into_iter().enumerate() {
+                        if !inner(child) {
+                            pairs.push(empty);
+                            continue;
+                        }
+                        let c = &tree.nodes[child as usize];
+                        let at = 2 * (b + 1 + side as u32);
+                        set_link(&mut pairs, 2 * b + side as u32, at);
+                        pairs.push(NodePair([of(c.left), of(c.right)]));
+                        next.extend([(c.left, at), (c.right, at + 1)].into_iter().filter(|&(s, _)| inner(s)));
+                    }
+                }
+                std::mem::swap(&mut level, &mut next);
+                if level.is_empty() {
+                    break;
+                }
+            }
+            // Inner nodes below the treelet's last blocks root the next treelets (depth first,
+            // so that a subtree's treelets stay near each other).
+            treelets.extend(level.iter().rev().copied());
         }
-        SampleTree { nodes }
+        SampleTree { pairs }
     }
 
     pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
+        self.pairs.is_empty()
+    }
+
+    /// Node `id` (the root is 0; see [`SampleNode::children`]).
+    #[inline(always)]
+    pub fn node(&self, id: u32) -> &SampleNode {
+        &self.pairs[(id >> 1) as usize].0[(id & 1) as usize]
+    }
+
+    /// Number of nodes (the unused slot beside the root included).
+    pub fn len(&self) -> usize {
+        2 * self.pairs.len()
+    }
+
+    /// The two children of an inner node.
+    #[inline(always)]
+    fn children_of(&self, node: &SampleNode) -> &[SampleNode; 2] {
+        &self.pairs[(node.link >> 1) as usize].0
     }
 }
 
@@ -196,17 +270,17 @@ pub fn select_cut<'s>(
     if tree.is_empty() {
         return cut;
     }
-    let nodes = &tree.nodes;
-    if nodes[0].is_leaf() {
+    let root = tree.node(0);
+    if root.is_leaf() {
         cut.push(0);
         return cut;
     }
-    heap.push(Entry { importance: importance(&nodes[0]), node: 0 });
+    heap.push(Entry { importance: importance(root), node: 0 });
     // `cut` holds the leaves reached so far; the heap the inner nodes.
     while heap.len() + cut.len() < cut_size.max(1) as usize {
         let Some(top) = heap.pop() else { break };
-        for child in nodes[top.node as usize].children() {
-            let c = &nodes[child as usize];
+        for child in tree.node(top.node).children() {
+            let c = tree.node(child);
             if c.is_leaf() {
                 cut.push(child);
             } else {
@@ -227,16 +301,15 @@ pub fn sample_light(
     share: f32,
     rng: &mut u64,
 ) -> (u32, f32) {
-    let nodes = &tree.nodes;
-    let mut n = &nodes[start as usize];
+    let mut n = tree.node(start);
     let mut prob = 1.0f32;
+    prefetch_block(tree, n);
     while !n.is_leaf() {
-        let [li, ri] = n.children();
-        let (l, r) = (&nodes[li as usize], &nodes[ri as usize]);
-        // Both grandchildren pairs are fetched while the children's importances are computed:
-        // the descent's cost is memory latency once the tree outgrows the caches.
-        prefetch(nodes, l);
-        prefetch(nodes, r);
+        let [l, r] = tree.children_of(n);
+        // The children's blocks are fetched while their importances are computed; the pairs
+        // of the level after them are in the block fetched one level earlier (type docs).
+        prefetch_block(tree, l);
+        prefetch_block(tree, r);
         let p = left_probability(l, r, importance(l), importance(r), share);
         *rng = rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let u = (mix64(*rng) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
@@ -251,21 +324,26 @@ pub fn sample_light(
     (n.light(), prob)
 }
 
-/// Asks the CPU to fetch the children pair of `node` (a hint; nothing on other targets).
+/// Asks the CPU to fetch the block below `node`: its children's pair and, where `node` heads a
+/// block, the two pairs after it (a hint; nothing on other targets). Fetching lines of the
+/// block that are already cached costs nothing measurable.
 #[inline(always)]
-fn prefetch(nodes: &[SampleNode], node: &SampleNode) {
+fn prefetch_block(tree: &SampleTree, node: &SampleNode) {
     #[cfg(target_arch = "x86_64")]
     if !node.is_leaf() {
-        if let Some(pair) = nodes.get(node.link as usize) {
-            // SAFETY: prefetching is a hint; any address is allowed, and this one is in bounds.
-            unsafe {
-                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                _mm_prefetch::<_MM_HINT_T0>((pair as *const SampleNode).cast());
+        let first = (node.link >> 1) as usize;
+        if first + BLOCK <= tree.pairs.len() {
+            for pair in &tree.pairs[first..first + BLOCK] {
+                // SAFETY: prefetching is a hint; any address is allowed, and this one is in bounds.
+                unsafe {
+                    use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                    _mm_prefetch::<_MM_HINT_T0>((pair as *const NodePair).cast());
+                }
             }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (nodes, node);
+    let _ = (tree, node);
 }
 
 /// The probability of every light below `start` under [`sample_light`] (for tests and
@@ -276,17 +354,16 @@ pub fn light_probabilities(
     importance: &impl Fn(&SampleNode) -> f32,
     share: f32,
 ) -> Vec<(u32, f64)> {
-    let nodes = &tree.nodes;
     let mut out = Vec::new();
     let mut stack = vec![(start, 1.0f64)];
     while let Some((i, prob)) = stack.pop() {
-        let n = &nodes[i as usize];
+        let n = tree.node(i);
         if n.is_leaf() {
             out.push((n.light(), prob));
             continue;
         }
         let [li, ri] = n.children();
-        let (l, r) = (&nodes[li as usize], &nodes[ri as usize]);
+        let (l, r) = (tree.node(li), tree.node(ri));
         let p = left_probability(l, r, importance(l), importance(r), share) as f64;
         stack.push((li, prob * p));
         stack.push((ri, prob * (1.0 - p)));
@@ -315,4 +392,76 @@ pub fn stochastic_cut(
         }
     }
     cut.len() as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
+    use crate::tree::lights::LightSummary;
+    use crate::tree::Aabb;
+    use haze_core::Sampler;
+
+    fn lights(n: usize, seed: u64) -> Vec<LightSummary> {
+        let mut s = Sampler::from_seed(seed);
+        (0..n)
+            .map(|_| {
+                let lo = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+                let p = s.next_1d() * s.next_1d();
+                LightSummary {
+                    bounds: Aabb { lo, hi: lo + Vec3::splat(s.next_1d()) },
+                    intensity: p,
+                    flux_bound: Rgb::splat(p),
+                    length: 1.0,
+                    power: Rgb::new(p, 0.5 * p, 0.0),
+                }
+            })
+            .collect()
+    }
+
+    /// Walks the layout and the source tree together: the same nodes (box, power, light) under
+    /// the same parents; every block holds its head's children and grandchildren pairs in
+    /// order; every light appears once.
+    fn check_layout(tree: &LightTree, sample: &SampleTree) {
+        let mut seen = vec![false; tree.nodes.iter().filter(|n| n.is_leaf()).count()];
+        // (source node, layout id, heads a block)
+        let mut stack = vec![(tree.root, 0u32, true)];
+        let mut blocks = 0;
+        while let Some((src, id, head)) = stack.pop() {
+            let (n, s) = (&tree.nodes[src as usize], sample.node(id));
+            assert_eq!(s.center, n.bounds.center());
+            assert_eq!(s.power, n.power);
+            if n.is_leaf() {
+                assert!(s.is_leaf());
+                assert!(!std::mem::replace(&mut seen[s.light() as usize], true), "light twice");
+                continue;
+            }
+            assert!(!s.is_leaf() && s.link % 2 == 0, "children start a pair");
+            let [l, r] = s.children();
+            if head {
+                blocks += 1;
+                for (side, (child, cid)) in [(n.left, l), (n.right, r)].into_iter().enumerate() {
+                    if !tree.nodes[child as usize].is_leaf() {
+                        assert_eq!(sample.node(cid).link, s.link + 2 * (1 + side as u32), "block order");
+                    }
+                }
+            }
+            stack.push((n.left, l, !head));
+            stack.push((n.right, r, !head));
+        }
+        assert!(seen.iter().all(|&b| b), "every light in the layout");
+        assert!(blocks > 0 || tree.nodes.len() == 1);
+        assert!(sample.len() <= 2 * (1 + BLOCK * (seen.len() / 2 + 1)), "the reserved room suffices");
+    }
+
+    #[test]
+    fn layout_keeps_the_tree() {
+        for (n, seed) in [(1, 1), (2, 2), (3, 3), (17, 4), (1000, 5), (4096, 6)] {
+            let ls = lights(n, seed);
+            check_layout(&build_median_split(&ls, seed), &SampleTree::new(&build_median_split(&ls, seed)));
+            let settings = BuildSettings { group_size: 64, seed, ..Default::default() };
+            let agg = build_agglomerative(&ls, &settings);
+            check_layout(&agg, &SampleTree::new(&agg));
+        }
+    }
 }

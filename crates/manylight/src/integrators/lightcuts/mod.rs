@@ -290,10 +290,9 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
                         },
                     );
                     if PROBING.get() {
-                        let nodes = &forest.sample.nodes;
                         let (mut total, mut largest) = (0.0f64, 0.0f64);
                         for &n in scratch.cut() {
-                            let i = importance(&nodes[n as usize]) as f64;
+                            let i = importance(forest.sample.node(n)) as f64;
                             total += i;
                             largest = largest.max(i);
                         }
