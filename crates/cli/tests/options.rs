@@ -6,33 +6,16 @@
 use haze_engine::options::{Scope, OPTIONS};
 use haze_engine::MethodKind;
 use std::collections::BTreeSet;
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
-const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+mod common;
+
+use common::{haze, repo, stderr, tmp};
 
 /// Options of `haze render` that are not the engine's: where and how to write, threads, the
 /// method itself, scene parameters. They apply to every method. `--cut-image` is the one
 /// output that needs a lightcut method (tested below like the table's options).
 const RENDER_OWN: &[&str] = &["output", "threads", "integrator", "variance-out", "exposure", "quiet", "help"];
-
-fn repo(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("haze-options-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn haze(args: &[&str]) -> Output {
-    Command::new(HAZE).args(args).output().expect("haze runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn help(command: &str) -> String {
     let o = haze(&[command, "--help"]);
