@@ -10,7 +10,7 @@ use std::process::Output;
 
 mod common;
 
-use common::{haze, repo, stderr, tmp};
+use common::{haze, repo, s, stderr, tmp};
 
 /// Options of `haze render` that are not the engine's: where and how to write, threads, the
 /// method itself, scene parameters. They apply to every method. `--cut-image` is the one
@@ -55,19 +55,8 @@ fn help_options(text: &str) -> Vec<(String, Option<char>)> {
 fn render(method: MethodKind, extra: &[&str]) -> Output {
     let scene = repo("scenes/bench-smoke-room.xml");
     let out = tmp(&format!("{method}.exr"));
-    let mut args = vec![
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "-D",
-        "res=8",
-        "-D",
-        "spp=1",
-        "--quiet",
-        "--integrator",
-        method.name(),
-    ];
+    let mut args = vec!["render", s(&scene), "-o", s(&out), "-D", "res=8", "-D", "spp=1", "--quiet"];
+    args.extend(["--integrator", method.name()]);
     let budget_given = extra.iter().any(|a| *a == "--vrls" || *a == "--light-paths");
     if method != MethodKind::VolPath && !budget_given {
         args.extend(["--light-paths", "30"]);
