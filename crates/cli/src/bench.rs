@@ -6,9 +6,8 @@ use clap::Args;
 use haze_engine::options::{self, MethodKind, Options, Spelling};
 use haze_manylight::integrators::{LightBudget, ManyLightSettings, VrlIntegrator};
 use haze_manylight::lighttrace::LightTraceSettings;
-use haze_render::progressive::{render, RenderSettings};
+use haze_render::progressive::{render, render_volpath, RenderSettings};
 use haze_render::Integrator;
-use haze_render::VolPath;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -372,13 +371,7 @@ fn bench_volpath(options: &Options, scenes: &[PathBuf]) -> Result<()> {
     for path in scenes {
         let scene = load_scene(path, &[])?;
         let settings = RenderSettings { spp: spp(options), spp_per_pass: 4, ..Default::default() };
-        let out = render(
-            &scene,
-            &VolPath::from_spec(&scene.integrator),
-            &settings,
-            &AtomicBool::new(false),
-            |_| {},
-        );
+        let out = render_volpath(&scene, &settings);
         let px = scene.camera.width as u64 * scene.camera.height as u64;
         let rate = (px * out.film.samples) as f64 / out.elapsed.as_secs_f64() * 1e-6;
         let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();

@@ -6,39 +6,9 @@ use haze_render::image_io::RgbImage;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+mod common;
 
-fn repo(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
-}
-
-/// The test data shipped in the repository (`tests/data`, e.g. `validation/scenes/...`).
-fn shared(rel: &str) -> PathBuf {
-    repo("tests/data").join(rel)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("haze-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn haze(args: &[&str]) -> Output {
-    Command::new(HAZE).args(args).output().expect("haze runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Exit code 1 with an `error:` line; a panic would exit with 101 and print "panicked".
-fn assert_clean_failure(o: &Output, context: &str) -> String {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "{context}: exit {:?}\n{err}", o.status.code());
-    assert!(err.starts_with("error: "), "{context}: {err}");
-    assert!(!err.contains("panicked"), "{context}: {err}");
-    err
-}
+use common::{assert_clean_failure, assert_fails_with, data, haze, repo, s, stderr, tmp, HAZE};
 
 #[test]
 fn every_bad_scene_is_a_clear_error_not_a_panic() {
@@ -66,7 +36,7 @@ fn every_bad_scene_is_a_clear_error_not_a_panic() {
 
 #[test]
 fn bad_command_line_values_are_clear_errors() {
-    let scene = shared("validation/scenes/hg-box.xml");
+    let scene = data("validation/scenes/hg-box.xml");
     let s = scene.to_str().unwrap();
     let out = tmp("x.exr");
     let o = out.to_str().unwrap();
@@ -94,7 +64,7 @@ fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
 
 #[test]
 fn same_seed_gives_the_same_image_for_any_thread_count() {
-    let scene = shared("validation/scenes/foggy-room.xml");
+    let scene = data("validation/scenes/foggy-room.xml");
     let (a, b, c) = (tmp("t1.exr"), tmp("t2.exr"), tmp("seed2.exr"));
     render(&scene, &a, &["--spp", "4", "--seed", "7", "--threads", "1"]);
     render(&scene, &b, &["--spp", "4", "--seed", "7", "--threads", "2"]);
@@ -109,7 +79,7 @@ fn same_seed_gives_the_same_image_for_any_thread_count() {
 #[test]
 fn components_sum_to_the_full_image_and_are_finite() {
     for name in ["foggy-room", "hg-box"] {
-        let scene = shared(&format!("validation/scenes/{name}.xml"));
+        let scene = data(&format!("validation/scenes/{name}.xml"));
         let out = tmp(&format!("{name}.exr"));
         let var = tmp(&format!("{name}-var.exr"));
         render(&scene, &out, &["--spp", "4", "--components", "--variance-out", var.to_str().unwrap()]);
@@ -146,7 +116,7 @@ fn components_sum_to_the_full_image_and_are_finite() {
 
 #[test]
 fn time_budget_renders_progressively() {
-    let scene = shared("validation/scenes/hg-box.xml");
+    let scene = data("validation/scenes/hg-box.xml");
     let out = tmp("timed.exr");
     let o = render(&scene, &out, &["--time", "0.5"]);
     let err = stderr(&o);
@@ -157,7 +127,7 @@ fn time_budget_renders_progressively() {
 /// Ctrl-C (SIGINT) finishes the current pass and writes the image of the passes done so far.
 #[test]
 fn interrupt_writes_the_passes_finished_so_far() {
-    let scene = shared("validation/scenes/foggy-room.xml");
+    let scene = data("validation/scenes/foggy-room.xml");
     let out = tmp("interrupted.exr");
     let child = Command::new(HAZE)
         .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--time", "60", "--quiet"])
@@ -220,20 +190,7 @@ fn cut_image_is_a_heat_map_of_the_image_size() {
         assert_eq!(img.get_pixel(23, 27).0, [252, 255, 164]);
     }
     let (out, map) = (tmp("cut.exr"), tmp("cut-map.png"));
-    let e = assert_clean_failure(
-        &haze(&[
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "-D",
-            "res=8",
-            "--integrator",
-            "vrl",
-            "--cut-image",
-            map.to_str().unwrap(),
-        ]),
-        "cut image with vrl",
-    );
-    assert!(e.contains("--cut-image does not apply to vrl"), "{e}");
+    let args =
+        ["render", s(&scene), "-o", s(&out), "-D", "res=8", "--integrator", "vrl", "--cut-image", s(&map)];
+    assert_fails_with(&haze(&args), "--cut-image does not apply to vrl");
 }

@@ -3,9 +3,10 @@
 
 use haze_render::image_io::RgbImage;
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+mod common;
+
+use common::{assert_fails_with, assert_success as check, haze, stderr, tmp_dir};
 
 /// A closed black box of isotropic fog lit by a small area light (the spirit of bench-smoke-room).
 const TINY_SCENE: &str = r#"<scene version="3.0.0">
@@ -38,27 +39,17 @@ const TINY_SCENE: &str = r#"<scene version="3.0.0">
 </scene>
 "#;
 
-fn tmp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("haze-compare-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn haze(args: &[&str]) -> Output {
-    Command::new(HAZE).args(args).output().expect("haze runs")
-}
-
-fn check(o: &Output, what: &str) -> String {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{what} failed:\n{err}");
-    String::from_utf8_lossy(&o.stdout).into_owned()
+/// A folder of its own for test `name` with [`TINY_SCENE`] in it; returns both.
+fn tiny_scene(name: &str) -> (PathBuf, PathBuf) {
+    let dir = tmp_dir(name);
+    let scene = dir.join("tiny.xml");
+    std::fs::write(&scene, TINY_SCENE).unwrap();
+    (dir, scene)
 }
 
 #[test]
 fn compare_writes_table_images_and_report() {
-    let dir = tmp_dir("report");
-    let scene = dir.join("tiny.xml");
-    std::fs::write(&scene, TINY_SCENE).unwrap();
+    let (dir, scene) = tiny_scene("report");
     let s = |p: &PathBuf| p.to_str().unwrap().to_string();
     let reference = dir.join("ref.exr");
     check(&haze(&["reference", &s(&scene), "-o", &s(&reference), "--time", "0.5"]), "haze reference");
@@ -119,16 +110,14 @@ fn compare_writes_table_images_and_report() {
 
 #[test]
 fn compare_without_reference_renders_one_first() {
-    let dir = tmp_dir("auto-ref");
-    let scene = dir.join("tiny.xml");
-    std::fs::write(&scene, TINY_SCENE).unwrap();
+    let (dir, scene) = tiny_scene("auto-ref");
     let out = dir.join("out");
     let (scene, out_s) = (scene.to_str().unwrap(), out.to_str().unwrap());
     let args =
         ["compare", scene, "--time", "0.2", "--reference-time", "0.4", "--method", "volpath", "-o", out_s];
     let o = haze(&args);
     let table = check(&o, "haze compare without --reference");
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(err.contains("no --reference given: rendering one with volpath for 0.4 s"), "{err}");
     let reference = RgbImage::read_exr(&out.join("reference.exr")).expect("the reference is kept");
     assert_eq!((reference.width, reference.height), (16, 12));
@@ -147,22 +136,19 @@ fn compare_without_reference_renders_one_first() {
         "--method",
         "volpath",
     ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--reference-time only applies"), "{err}");
+    assert_fails_with(&o, "--reference-time only applies");
     std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn bad_method_specs_and_missing_reference_are_clear_errors() {
-    let dir = tmp_dir("errors");
-    let scene = dir.join("tiny.xml");
-    std::fs::write(&scene, TINY_SCENE).unwrap();
+    let (dir, scene) = tiny_scene("errors");
     let scene = scene.to_str().unwrap();
     let o = haze(&["compare", scene, "--reference", "nope.exr", "--time", "1", "--method", "vrl:ten"]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("got 'ten'"), "{err}");
+    // A clap value parser's error: exit code 2, `error: invalid value ...`.
+    let err = stderr(&o);
+    assert!(o.status.code() == Some(2) && err.contains("got 'ten'") && !err.contains("panicked"), "{err}");
     let o = haze(&["compare", scene, "--reference", "nope.exr", "--time", "1", "--method", "volpath"]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("nope.exr") && !err.contains("panicked"), "{err}");
+    assert_fails_with(&o, "nope.exr");
     std::fs::remove_dir_all(&dir).ok();
 }

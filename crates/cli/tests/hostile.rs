@@ -1,27 +1,11 @@
 //! `haze render` on hostile command lines (issue 16): no panic, no abort, no clobbered file.
 //! Each case is a clear `error:` and exit code 1, before anything large is allocated.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
 
-const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+mod common;
 
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("haze-hostile-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn haze(args: &[&str]) -> Output {
-    Command::new(HAZE).args(args).output().expect("haze runs")
-}
-
-fn failure(o: &Output, want: &str) {
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "exit {:?}\n{err}", o.status.code());
-    assert!(err.starts_with("error: ") && !err.contains("panicked"), "{err}");
-    assert!(err.contains(want), "`{err}` lacks `{want}`");
-}
+use common::{assert_fails_with as failure, haze, s, tmp};
 
 /// A small valid scene in the temporary folder.
 fn scene(name: &str, film: u32) -> PathBuf {
@@ -39,10 +23,6 @@ fn scene(name: &str, film: u32) -> PathBuf {
     )
     .unwrap();
     path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]
@@ -106,36 +86,9 @@ fn budgets_threads_films_and_lights_are_bounded() {
     );
     let big = scene("big.xml", 65536);
     failure(&haze(&["render", s(&big), "-o", o, "--spp", "1", "-q"]), "too large for memory");
-    failure(
-        &haze(&[
-            "render",
-            s(&sc),
-            "-o",
-            o,
-            "--spp",
-            "1",
-            "--integrator",
-            "vrl",
-            "--vrls",
-            "10000000000",
-            "-q",
-        ]),
-        "--vrls 10000000000",
-    );
-    failure(
-        &haze(&[
-            "render",
-            s(&sc),
-            "-o",
-            o,
-            "--spp",
-            "1",
-            "--integrator",
-            "vrl",
-            "--light-paths",
-            "10000000000",
-            "-q",
-        ]),
-        "--light-paths 10000000000",
-    );
+    for option in ["--vrls", "--light-paths"] {
+        let args =
+            ["render", s(&sc), "-o", o, "--spp", "1", "--integrator", "vrl", option, "10000000000", "-q"];
+        failure(&haze(&args), &format!("{option} 10000000000"));
+    }
 }

@@ -6,33 +6,16 @@
 use haze_engine::options::{Scope, OPTIONS};
 use haze_engine::MethodKind;
 use std::collections::BTreeSet;
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
-const HAZE: &str = env!("CARGO_BIN_EXE_haze");
+mod common;
+
+use common::{haze, repo, s, stderr, tmp};
 
 /// Options of `haze render` that are not the engine's: where and how to write, threads, the
 /// method itself, scene parameters. They apply to every method. `--cut-image` is the one
 /// output that needs a lightcut method (tested below like the table's options).
 const RENDER_OWN: &[&str] = &["output", "threads", "integrator", "variance-out", "exposure", "quiet", "help"];
-
-fn repo(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("haze-options-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn haze(args: &[&str]) -> Output {
-    Command::new(HAZE).args(args).output().expect("haze runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn help(command: &str) -> String {
     let o = haze(&[command, "--help"]);
@@ -72,19 +55,8 @@ fn help_options(text: &str) -> Vec<(String, Option<char>)> {
 fn render(method: MethodKind, extra: &[&str]) -> Output {
     let scene = repo("scenes/bench-smoke-room.xml");
     let out = tmp(&format!("{method}.exr"));
-    let mut args = vec![
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "-D",
-        "res=8",
-        "-D",
-        "spp=1",
-        "--quiet",
-        "--integrator",
-        method.name(),
-    ];
+    let mut args = vec!["render", s(&scene), "-o", s(&out), "-D", "res=8", "-D", "spp=1", "--quiet"];
+    args.extend(["--integrator", method.name()]);
     let budget_given = extra.iter().any(|a| *a == "--vrls" || *a == "--light-paths");
     if method != MethodKind::VolPath && !budget_given {
         args.extend(["--light-paths", "30"]);

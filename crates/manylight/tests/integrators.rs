@@ -67,10 +67,15 @@ fn render_passes<I: Integrator>(
 }
 
 impl Passes {
-    /// Mean and variance of the mean of the image mean of `comp`, channel-averaged, over passes.
-    fn mean_and_variance(&self, comp: Component) -> (f64, f64) {
-        let xs: Vec<f64> =
-            self.pass_means.iter().map(|m| m[comp as usize].iter().sum::<f64>() / 3.0).collect();
+    /// Mean and variance of the mean of the image mean of `comp` (`None`: all components
+    /// summed), channel-averaged, over passes.
+    fn mean_and_variance(&self, comp: Option<Component>) -> (f64, f64) {
+        let comps = comp.map_or(Component::ALL.to_vec(), |c| vec![c]);
+        let xs: Vec<f64> = self
+            .pass_means
+            .iter()
+            .map(|m| comps.iter().map(|&c| m[c as usize].iter().sum::<f64>() / 3.0).sum::<f64>())
+            .collect();
         let n = xs.len() as f64;
         let mean = xs.iter().sum::<f64>() / n;
         let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
@@ -86,9 +91,18 @@ fn compare(a: &Passes, b: &Passes, comp: Component) -> (ZTestReport, f64) {
     };
     let pixels =
         z_test(&a.film.mean(Some(comp)), &var_of(&a.film), &b.film.mean(Some(comp)), &var_of(&b.film), 0.01);
-    let ((ma, va), (mb, vb)) = (a.mean_and_variance(comp), b.mean_and_variance(comp));
+    let ((ma, va), (mb, vb)) = (a.mean_and_variance(Some(comp)), b.mean_and_variance(Some(comp)));
     let mean_z = if va + vb > 0.0 { (ma - mb) / (va + vb).sqrt() } else { 0.0 };
     (pixels, mean_z)
+}
+
+/// Prints one comparison and records it in `failures` when more than `max_failed` of the
+/// channel-pixels fail the z-test or the image mean is more than 5 standard errors off.
+fn judge(failures: &mut Vec<String>, what: &str, r: &ZTestReport, mean_z: f64, max_failed: f64) {
+    println!("{what}: {r}; per-pass image-mean z = {mean_z:.2}");
+    if r.failed_fraction() > max_failed || mean_z.abs() > 5.0 {
+        failures.push(format!("{what}: {r}; image-mean z = {mean_z:.2}"));
+    }
 }
 
 fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
@@ -114,10 +128,7 @@ fn check_against_volpath(name: &str, paths: u64, passes: u32) {
     for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
         for comp in [Component::Single, Component::Multiple, Component::Emitted] {
             let (r, mean_z) = compare(f, &reference, comp);
-            println!("{name} {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
-            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
-                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
-            }
+            judge(&mut failures, &format!("{name} {method} {}", comp.name()), &r, mean_z, 0.01);
         }
     }
     assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
@@ -191,10 +202,7 @@ fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
         );
         for (method, f, reference) in [("vrl_lightcuts", &a, &vrl), ("vpl_lightcuts", &b, &vpl)] {
             let (r, mean_z) = compare(f, reference, Component::Multiple);
-            println!("{name} {method} k = {cut_size}: {r}; per-pass image-mean z = {mean_z:.2}");
-            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
-                failures.push(format!("{method} k = {cut_size}: {r}; image-mean z = {mean_z:.2}"));
-            }
+            judge(&mut failures, &format!("{name} {method} k = {cut_size}"), &r, mean_z, 0.01);
         }
     }
     assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
@@ -238,19 +246,9 @@ fn check_stochastic_against_mitsuba(name: &str, paths: u64, passes: u32) {
         let var_mean: Vec<f32> = sample_var.iter().map(|v| v / f.film.samples as f32).collect();
         let var_ref: Vec<f32> = sample_var.iter().map(|v| v / 16384.0).collect();
         let r = z_test(&f.film.mean(None), &var_mean, &reference.data, &var_ref, 0.01);
-        let xs: Vec<f64> = f
-            .pass_means
-            .iter()
-            .map(|m| (0..4).map(|c| m[c].iter().sum::<f64>() / 3.0).sum::<f64>())
-            .collect();
-        let n = xs.len() as f64;
-        let mean = xs.iter().sum::<f64>() / n;
-        let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0) / n;
+        let (mean, var) = f.mean_and_variance(None);
         let mean_z = (mean - r.reference_mean) / var.sqrt();
-        println!("{name} {method} vs Mitsuba 3: {r}; per-pass image-mean z = {mean_z:.2}");
-        if r.failed_fraction() > 0.005 || mean_z.abs() > 5.0 {
-            failures.push(format!("{method}: {r}; image-mean z = {mean_z:.2}"));
-        }
+        judge(&mut failures, &format!("{name} {method} vs Mitsuba 3"), &r, mean_z, 0.005);
     }
     assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
 }

@@ -94,20 +94,33 @@ fn exhaustive_cut_reproduces_brute_force() {
     }
 }
 
-#[test]
-fn bound_cut_default_epsilon_agrees_with_brute_force() {
-    let scene = load_small("foggy-room", 24, 18);
-    let passes = 64;
-    let settings = LightcutSettings { strategy: CutStrategy::Bound, ..Default::default() };
-    let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 300), settings, 5).unwrap();
+/// `vrl_lightcuts` with `settings` against brute-force `vrl` on the 24x18 `name` scene, `paths`
+/// light paths and `passes` passes each: the multiple-scattering images agree by the per-pixel
+/// z-test. Returns the lightcut integrator for its statistics.
+fn assert_lightcuts_match_vrl(
+    name: &str,
+    paths: u64,
+    passes: u32,
+    settings: LightcutSettings,
+    label: &str,
+) -> LightcutsIntegrator<Vrls> {
+    let scene = load_small(name, 24, 18);
+    let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, paths), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
-    let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 300), 6).unwrap(), passes, 6);
+    let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, paths), 6).unwrap(), passes, 6);
     let r = z_test_multiple(&a, &b, 24, 18);
-    println!("vrl_lightcuts (eps 0.02) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
+    println!("vrl_lightcuts ({label}) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");
     // Image means: pixels of a pass are correlated, so compare with a loose per-pixel-based
     // gate only as a sanity check of gross bias (10%).
     assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");
+    lc
+}
+
+#[test]
+fn bound_cut_default_epsilon_agrees_with_brute_force() {
+    let settings = LightcutSettings { strategy: CutStrategy::Bound, ..Default::default() };
+    assert_lightcuts_match_vrl("foggy-room", 300, 64, settings, "eps 0.02");
 }
 
 /// `--bound tight` only changes which clusters the cut opens, never the estimate's expectation:
@@ -116,17 +129,9 @@ fn bound_cut_default_epsilon_agrees_with_brute_force() {
 #[test]
 fn tight_bound_agrees_with_brute_force() {
     use haze_manylight::tree::bound::BoundKind;
-    let scene = load_small("hg-box", 24, 18);
-    let passes = 48;
     let settings =
         LightcutSettings { strategy: CutStrategy::Bound, bound: BoundKind::Tight, ..Default::default() };
-    let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 4000), settings, 5).unwrap();
-    let a = film(&scene, &lc, passes, 5);
-    let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 4000), 6).unwrap(), passes, 6);
-    let r = z_test_multiple(&a, &b, 24, 18);
-    println!("vrl_lightcuts (tight bound) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
-    assert!(r.failed_fraction() <= 0.01, "{r}");
-    assert!((r.mean / r.reference_mean - 1.0).abs() < 0.1, "{r}");
+    let lc = assert_lightcuts_match_vrl("hg-box", 4000, 48, settings, "tight bound");
     // The cut must actually cut: fewer nodes than lights on average.
     let (mean_cut, _, _) = lc.cut_statistics();
     assert!(mean_cut < 0.9 * lc.lights_per_pass(), "cut {mean_cut} of {} lights", lc.lights_per_pass());

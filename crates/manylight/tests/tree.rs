@@ -30,6 +30,13 @@ fn random_vrls(s: &mut Sampler, n: usize, center: Vec3, extent: f32, max_len: f3
         .collect()
 }
 
+/// Summaries of `n` random VRLs (lengths up to 1 in a box of side 4 about the origin) in the
+/// isotropic medium.
+fn random_lights(s: &mut Sampler, n: usize) -> Vec<LightSummary> {
+    let m = medium(0.0);
+    random_vrls(s, n, Vec3::ZERO, 4.0, 1.0).iter().map(|v| LightSummary::vrl(v, &m)).collect()
+}
+
 fn medium(g: f32) -> VrlMedium {
     VrlMedium {
         sigma_s: Rgb::new(0.5, 0.6, 0.7),
@@ -41,10 +48,8 @@ fn medium(g: f32) -> VrlMedium {
 #[test]
 fn trees_satisfy_their_invariants() {
     let mut s = Sampler::from_seed(1);
-    let m = medium(0.0);
     for &n in &[1usize, 2, 3, 17, 1000, 5000] {
-        let vrls = random_vrls(&mut s, n, Vec3::ZERO, 4.0, 1.0);
-        let lights: Vec<LightSummary> = vrls.iter().map(|v| LightSummary::vrl(v, &m)).collect();
+        let lights = random_lights(&mut s, n);
         for settings in [BuildSettings::default(), BuildSettings { group_size: 64, radius: 4, seed: 3 }] {
             let t = build_agglomerative(&lights, &settings);
             t.check(&lights).unwrap_or_else(|e| panic!("agglomerative, n = {n}: {e}"));
@@ -60,10 +65,7 @@ fn trees_satisfy_their_invariants() {
 /// representatives' choice hashes the seed and the children's representatives).
 #[test]
 fn agglomerative_tree_does_not_depend_on_thread_count() {
-    let mut s = Sampler::from_seed(9);
-    let m = medium(0.0);
-    let vrls = random_vrls(&mut s, 20_000, Vec3::ZERO, 4.0, 1.0);
-    let lights: Vec<LightSummary> = vrls.iter().map(|v| LightSummary::vrl(v, &m)).collect();
+    let lights = random_lights(&mut Sampler::from_seed(9), 20_000);
     let settings = BuildSettings { group_size: 256, radius: 16, seed: 4 };
     let trees: Vec<_> = [1usize, 2, 3]
         .iter()
@@ -86,10 +88,7 @@ fn agglomerative_tree_does_not_depend_on_thread_count() {
 /// The check itself must be able to fail.
 #[test]
 fn invariant_check_catches_a_broken_tree() {
-    let mut s = Sampler::from_seed(2);
-    let m = medium(0.0);
-    let vrls = random_vrls(&mut s, 100, Vec3::ZERO, 4.0, 1.0);
-    let lights: Vec<LightSummary> = vrls.iter().map(|v| LightSummary::vrl(v, &m)).collect();
+    let lights = random_lights(&mut Sampler::from_seed(2), 100);
     let mut t = build_agglomerative(&lights, &BuildSettings::default());
     let root = t.root as usize;
     t.nodes[root].intensity *= 1.5;

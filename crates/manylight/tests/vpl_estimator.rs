@@ -8,9 +8,7 @@ mod vrl_support;
 
 use haze_core::{Phase, Rgb, Sampler, Vec3};
 use haze_manylight::vpl::{sample_vpl_contribution, vpl_integrand, Vpl};
-use haze_manylight::vrl::sampling::{equiangular_pdf, sample_equiangular};
 use haze_manylight::vrl::{Segment, VrlMedium};
-use rayon::prelude::*;
 use vrl_support::*;
 
 struct Case {
@@ -147,15 +145,14 @@ fn run(
     ref_clamp: impl Fn(&Case) -> Option<f32> + Sync,
     n_max: usize,
 ) -> Vec<(bool, String)> {
-    cases
-        .par_iter()
-        .enumerate()
-        .map(|(i, case)| {
-            let reference = case.reference(ref_clamp(case));
-            let mc = monte_carlo(|s| est(case, s.next_1d()), 2000 + i as u64, 1e-3, n_max);
-            check(&case.name, &mc, reference)
-        })
-        .collect()
+    run_cases(
+        cases,
+        |c| c.name.as_str(),
+        |c| c.reference(ref_clamp(c)),
+        |c, s| est(c, s.next_1d()),
+        2000,
+        n_max,
+    )
 }
 
 #[test]
@@ -176,10 +173,7 @@ fn vpl_integrand_matches_f64_definition() {
         for _ in 0..200 {
             let u = s.next_1d() * c.cam.len;
             let f = vpl_integrand(&c.cam, &c.cam_medium, &c.vpl, &c.vpl_phase, u, c.clamp, c.connect());
-            let r = c.integrand64(u as f64, c.clamp);
-            for ch in 0..3 {
-                assert!((f[ch] as f64 - r[ch]).abs() <= 1e-3 * r[ch], "{}: {f} vs {r:?}", c.name);
-            }
+            assert_matches_f64(f, c.integrand64(u as f64, c.clamp), &c.name);
         }
     }
 }
@@ -189,11 +183,7 @@ fn vpl_integrand_matches_f64_definition() {
 #[test]
 fn the_check_rejects_a_wrong_pdf_and_the_clamp_bias() {
     let manual = |c: &Case, u: f32, wrong: bool| {
-        let r = c.vpl.p - c.cam.o;
-        let delta = r.dot(c.cam.d);
-        let h = (r - delta * c.cam.d).length();
-        let t = sample_equiangular(u, delta, h, 0.0, c.cam.len).unwrap();
-        let p = if wrong { 1.0 / c.cam.len } else { equiangular_pdf(t, delta, h, 0.0, c.cam.len) };
+        let (t, p) = equiangular_towards(&c.cam, c.vpl.p, u, wrong);
         vpl_integrand(&c.cam, &c.cam_medium, &c.vpl, &c.vpl_phase, t, None, c.connect()) / p
     };
     let all = cases();

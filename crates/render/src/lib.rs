@@ -15,4 +15,4 @@ pub mod progressive;
 pub use components::{Component, PathRadiance};
 pub use film::Film;
 pub use integrators::{Integrator, VolPath};
-pub use progressive::{render, RenderOutput, RenderSettings};
+pub use progressive::{render, render_volpath, RenderOutput, RenderSettings};

@@ -14,7 +14,7 @@
 
 use crate::components::PathRadiance;
 use crate::film::Film;
-use crate::integrators::Integrator;
+use crate::integrators::{Integrator, VolPath};
 use haze_core::Sampler;
 use haze_scene::Scene;
 use rayon::prelude::*;
@@ -82,6 +82,12 @@ pub struct RenderOutput {
     pub invalid_samples: u64,
     /// True if the cancel flag stopped the render before its target.
     pub interrupted: bool,
+}
+
+/// Renders `scene` with volpath as the scene's `<integrator>` element sets it, to the end of
+/// `settings`' budget, with no cancel flag and no progress report (benchmarks and tests).
+pub fn render_volpath(scene: &Scene, settings: &RenderSettings) -> RenderOutput {
+    render(scene, &VolPath::from_spec(&scene.integrator), settings, &AtomicBool::new(false), |_| {})
 }
 
 /// Renders `scene` with `integrator`. `cancel` is polled between passes (Ctrl-C sets it);

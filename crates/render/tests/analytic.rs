@@ -168,12 +168,18 @@ fn white_furnace_in_infinite_scattering_medium() {
     );
     let ray = Ray::new(Vec3::ZERO, Vec3::new(0.3, 0.2, 0.9).normalize());
     let (mean, se) = estimate(&scene, ray, Some(0), 20_000, 3);
+    assert_white(&mean, &se, "infinite medium");
+}
+
+/// The summed components are 1 in every channel within 4 standard errors (the errors of the
+/// components added, an upper bound for correlated ones) plus 2e-3.
+fn assert_white(mean: &PathRadiance, se: &PathRadiance, context: &str) {
     let total = mean.total();
     let se_total: Rgb = se.0.iter().copied().sum();
     for c in 0..3 {
         assert!(
             (total[c] - 1.0).abs() < 4.0 * se_total[c] + 2e-3,
-            "channel {c}: {} (all {total}, se {se_total}, split {:?})",
+            "{context}: channel {c} = {} (all {total}, se {se_total}, split {:?})",
             total[c],
             mean.0
         );
@@ -197,16 +203,7 @@ fn glass_ball_white_furnace() {
         );
         for o in [Vec3::new(0.0, 0.0, -4.0), Vec3::new(0.6, 0.0, -4.0), Vec3::new(0.0, 0.95, -4.0)] {
             let (mean, se) = estimate(&scene, Ray::new(o, Vec3::Z), None, 20_000, 5);
-            let total = mean.total();
-            let se_total: Rgb = se.0.iter().copied().sum();
-            for c in 0..3 {
-                assert!(
-                    (total[c] - 1.0).abs() < 4.0 * se_total[c] + 2e-3,
-                    "interior {interior:?}, origin {o}: channel {c} = {} (se {})",
-                    total[c],
-                    se_total[c]
-                );
-            }
+            assert_white(&mean, &se, &format!("interior {interior:?}, origin {o}"));
             assert!(
                 mean.get(Component::Surface).max_component() > 0.9,
                 "light through glass is surface light"

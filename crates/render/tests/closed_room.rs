@@ -4,10 +4,9 @@
 //! room 1: paths escaped through the room's edges and corners (see
 //! `crates/scene/tests/closed_room.rs` and `haze_scene::accel`).
 
-use haze_render::{render, RenderSettings, VolPath};
+use haze_render::{render_volpath, RenderSettings};
 use haze_scene::{load_str, LoadOptions};
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 /// `leak_closed_cube_room.xml` from the robustness cases, with the room's transform as given.
 fn lit_pixels(room_transform: &str, spp: u32) -> (usize, f64) {
@@ -29,8 +28,7 @@ fn lit_pixels(room_transform: &str, spp: u32) -> (usize, f64) {
     );
     let scene = load_str(&xml, Path::new("room.xml"), Path::new("."), &LoadOptions::default()).unwrap();
     let settings = RenderSettings { spp, seed: 7, spp_per_pass: 16, ..Default::default() };
-    let out =
-        render(&scene, &VolPath::from_spec(&scene.integrator), &settings, &AtomicBool::new(false), |_| {});
+    let out = render_volpath(&scene, &settings);
     assert_eq!(out.invalid_samples, 0);
     let mean = out.film.mean(None);
     let lit = mean.chunks(3).filter(|p| p.iter().any(|&c| c != 0.0)).count();
@@ -93,13 +91,7 @@ fn endless_paths_end_at_the_hard_cap() {
         assert!(warning.contains(&haze_scene::MAX_PATH_DEPTH.to_string()), "{warning}");
         let start = std::time::Instant::now();
         let settings = RenderSettings { spp: 1, ..Default::default() };
-        let out = render(
-            &scene,
-            &VolPath::from_spec(&scene.integrator),
-            &settings,
-            &AtomicBool::new(false),
-            |_| {},
-        );
+        let out = render_volpath(&scene, &settings);
         assert_eq!(out.invalid_samples, 0);
         assert!(start.elapsed().as_secs() < 60, "{:?}", start.elapsed());
     }

@@ -12,12 +12,10 @@
 //! The mean z-score gate is what catches a small global error such as sigma_t off by 10%.
 
 use haze_render::image_io::RgbImage;
-use haze_render::progressive::{render, RenderSettings};
-use haze_render::VolPath;
+use haze_render::progressive::{render_volpath, RenderSettings};
 use haze_scene::{load_file, LoadOptions, Scene};
 use haze_testkit::data::{validation, validation_scene};
 use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
-use std::sync::atomic::AtomicBool;
 
 const REFERENCE_SPP: f32 = 16384.0;
 
@@ -27,8 +25,7 @@ fn load(name: &str) -> Scene {
 
 fn compare(scene: &Scene, name: &str, spp: u32, seed: u64) -> ZTestReport {
     let settings = RenderSettings { spp, seed, spp_per_pass: 8, ..Default::default() };
-    let out =
-        render(scene, &VolPath::from_spec(&scene.integrator), &settings, &AtomicBool::new(false), |_| {});
+    let out = render_volpath(scene, &settings);
     assert_eq!(out.invalid_samples, 0, "NaN/Inf samples");
     let reference = RgbImage::read_exr(&validation(&format!("refs/{name}.exr"))).expect("reference EXR");
     assert_eq!(

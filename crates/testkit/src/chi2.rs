@@ -132,20 +132,12 @@ pub fn chi2_interval(
     bins: usize,
     n: usize,
 ) -> Chi2Result {
-    let (observed, outside) = bin_interval(&mut sample, a, b, bins, n);
     let w = (b - a) / bins as f64;
     let sub = 16;
-    let expected: Vec<f64> = (0..bins)
-        .map(|i| {
-            (0..sub).map(|j| pdf(a + w * (i as f64 + (j as f64 + 0.5) / sub as f64))).sum::<f64>()
-                / sub as f64
-                * w
-                * n as f64
-        })
-        .collect();
-    let mut r = chi2_test(&observed, &expected);
-    r.outside_support += outside;
-    r
+    interval_test(&mut sample, a, b, bins, n, |i| {
+        (0..sub).map(|j| pdf(a + w * (i as f64 + (j as f64 + 0.5) / sub as f64))).sum::<f64>() / sub as f64
+            * w
+    })
 }
 
 /// [`chi2_interval`] with expected counts from adaptive quadrature of the pdf over each bin,
@@ -159,21 +151,22 @@ pub fn chi2_interval_peaked(
     bins: usize,
     n: usize,
 ) -> Chi2Result {
-    let (observed, outside) = bin_interval(&mut sample, a, b, bins, n);
     let w = (b - a) / bins as f64;
-    let expected: Vec<f64> = (0..bins)
-        .map(|i| {
-            let (lo, hi) = (a + w * i as f64, a + w * (i + 1) as f64);
-            integrate(&pdf, lo, hi, peaks, 1e-9) * n as f64
-        })
-        .collect();
-    let mut r = chi2_test(&observed, &expected);
-    r.outside_support += outside;
-    r
+    interval_test(&mut sample, a, b, bins, n, |i| {
+        integrate(&pdf, a + w * i as f64, a + w * (i + 1) as f64, peaks, 1e-9)
+    })
 }
 
-/// Counts `n` samples in `bins` equal bins of `[a, b]`; also returns how many fell outside.
-fn bin_interval(sample: &mut dyn FnMut() -> f64, a: f64, b: f64, bins: usize, n: usize) -> (Vec<f64>, usize) {
+/// Counts `n` samples in `bins` equal bins of `[a, b]` and tests the counts against
+/// `n * probability(i)` for bin `i`; samples outside `[a, b]` count as outside the support.
+fn interval_test(
+    sample: &mut dyn FnMut() -> f64,
+    a: f64,
+    b: f64,
+    bins: usize,
+    n: usize,
+    probability: impl Fn(usize) -> f64,
+) -> Chi2Result {
     let w = (b - a) / bins as f64;
     let mut observed = vec![0.0f64; bins];
     let mut outside = 0usize;
@@ -185,7 +178,10 @@ fn bin_interval(sample: &mut dyn FnMut() -> f64, a: f64, b: f64, bins: usize, n:
         }
         observed[(((x - a) / w) as usize).min(bins - 1)] += 1.0;
     }
-    (observed, outside)
+    let expected: Vec<f64> = (0..bins).map(|i| probability(i) * n as f64).collect();
+    let mut r = chi2_test(&observed, &expected);
+    r.outside_support += outside;
+    r
 }
 
 #[cfg(test)]

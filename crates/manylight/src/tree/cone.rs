@@ -78,51 +78,6 @@ pub fn node_cones(tree: &LightTree, direction: impl Fn(u32) -> Vec3) -> Vec<Line
     cones
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use haze_core::Sampler;
-
-    /// The union holds both cones' lines: random directions inside each cone stay inside it.
-    #[test]
-    fn union_contains_both_cones() {
-        let mut s = Sampler::from_seed(4);
-        let dir = |s: &mut Sampler| haze_core::sampling::sample_uniform_sphere(s.next_2d());
-        for _ in 0..2000 {
-            let make = |s: &mut Sampler| {
-                let a = dir(s);
-                // A few lines around `a` (random signs): their cone by repeated union.
-                let k = 1 + (s.next_1d() * 4.0) as usize;
-                let spread = s.next_1d() * 0.8;
-                let lines: Vec<Vec3> = (0..k)
-                    .map(|_| {
-                        let l = (a + dir(s) * spread).normalize();
-                        if s.next_1d() < 0.5 {
-                            -l
-                        } else {
-                            l
-                        }
-                    })
-                    .collect();
-                let cone =
-                    lines[1..].iter().fold(LineCone::line(lines[0]), |c, &l| c.union(&LineCone::line(l)));
-                (cone, lines)
-            };
-            let (ca, la) = make(&mut s);
-            let (cb, lb) = make(&mut s);
-            let u = ca.union(&cb);
-            for l in la.iter().chain(&lb) {
-                let angle = l.cross(u.axis).length().atan2(l.dot(u.axis).abs());
-                assert!(angle <= u.half_angle + 1e-5, "line at {angle} outside cone {u:?}");
-                // min_sine is a lower bound of the sine towards every line of the cone.
-                let c = dir(&mut s);
-                let true_sine = c.cross(*l).length();
-                assert!(u.min_sine(c) <= true_sine + 1e-5);
-            }
-        }
-    }
-}
-
 /// A cone of directed directions (unit axis, half-angle in `[0, pi]`): the VRLs' propagation
 /// directions below a node, for the light-side phase of the tight bound.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -177,32 +132,65 @@ pub fn node_dir_cones(tree: &LightTree, direction: impl Fn(u32) -> Vec3) -> Vec<
 }
 
 #[cfg(test)]
-mod dir_tests {
+mod tests {
     use super::*;
+    use haze_core::sampling::sample_uniform_sphere;
     use haze_core::Sampler;
 
+    /// 2000 pairs of random cones, each the repeated union of 1 to 4 unit vectors within
+    /// `max_spread` of a random axis (each negated at random if `flip`), and the union of the
+    /// pair: `check(union, the vectors of both, sampler)`.
+    fn for_random_unions<C>(
+        seed: u64,
+        max_spread: f32,
+        flip: bool,
+        single: impl Fn(Vec3) -> C,
+        union: impl Fn(&C, &C) -> C,
+        mut check: impl FnMut(&C, &[Vec3], &mut Sampler),
+    ) {
+        let mut s = Sampler::from_seed(seed);
+        let make = |s: &mut Sampler, members: &mut Vec<Vec3>| -> C {
+            let a = sample_uniform_sphere(s.next_2d());
+            let spread = s.next_1d() * max_spread;
+            let k = 1 + (s.next_1d() * 4.0) as usize;
+            let start = members.len();
+            for _ in 0..k {
+                let d = (a + sample_uniform_sphere(s.next_2d()) * spread).normalize();
+                members.push(if flip && s.next_1d() < 0.5 { -d } else { d });
+            }
+            members[start + 1..].iter().fold(single(members[start]), |c, &d| union(&c, &single(d)))
+        };
+        let mut members = Vec::new();
+        for _ in 0..2000 {
+            members.clear();
+            let a = make(&mut s, &mut members);
+            let b = make(&mut s, &mut members);
+            check(&union(&a, &b), &members, &mut s);
+        }
+    }
+
+    /// The union holds both cones' lines, and `min_sine` bounds the sine towards each of them.
+    #[test]
+    fn line_union_contains_both_cones() {
+        for_random_unions(4, 0.8, true, LineCone::line, LineCone::union, |u, lines, s| {
+            for l in lines {
+                let angle = l.cross(u.axis).length().atan2(l.dot(u.axis).abs());
+                assert!(angle <= u.half_angle + 1e-5, "line at {angle} outside cone {u:?}");
+                let c = sample_uniform_sphere(s.next_2d());
+                assert!(u.min_sine(c) <= c.cross(*l).length() + 1e-5);
+            }
+        });
+    }
+
+    /// The union holds both cones' directions.
     #[test]
     fn dir_union_contains_both_cones() {
-        let mut s = Sampler::from_seed(8);
-        let dir = |s: &mut Sampler| haze_core::sampling::sample_uniform_sphere(s.next_2d());
-        for _ in 0..2000 {
-            let make = |s: &mut Sampler| {
-                let a = dir(s);
-                let spread = s.next_1d() * 1.5;
-                let k = 1 + (s.next_1d() * 4.0) as usize;
-                let ds: Vec<Vec3> = (0..k).map(|_| (a + dir(s) * spread).normalize()).collect();
-                let cone = ds[1..].iter().fold(DirCone { axis: ds[0], half_angle: 0.0 }, |c, &d| {
-                    c.union(&DirCone { axis: d, half_angle: 0.0 })
-                });
-                (cone, ds)
-            };
-            let (ca, da) = make(&mut s);
-            let (cb, db) = make(&mut s);
-            let u = ca.union(&cb);
-            for d in da.iter().chain(&db) {
+        let single = |d| DirCone { axis: d, half_angle: 0.0 };
+        for_random_unions(8, 1.5, false, single, DirCone::union, |u, ds, _| {
+            for d in ds {
                 let angle = d.cross(u.axis).length().atan2(d.dot(u.axis));
                 assert!(angle <= u.half_angle + 1e-5, "direction at {angle} outside cone {u:?}");
             }
-        }
+        });
     }
 }

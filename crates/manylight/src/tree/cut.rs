@@ -8,9 +8,9 @@
 //! representative reuses its sample; leaves are their own light's sampled contribution.
 //! With `epsilon = 0` and no size limit every leaf is evaluated: the brute-force sum.
 
+use super::heap::Keyed;
 use super::{LightTree, Node};
 use haze_core::Rgb;
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 /// What the cut needs from a light kind: bounds of nodes and sampled contributions of lights.
@@ -43,31 +43,15 @@ pub struct CutStats {
     pub hit_max: bool,
 }
 
+/// What the paper's cut keeps beside a node of its frontier (keyed by the node's bound).
 #[derive(Clone, Copy, Debug)]
-struct Entry {
-    bound: f32,
-    node: u32,
+struct Sampled {
     /// The representative's sampled contribution (unscaled), reused by a child that shares it.
     contribution: Rgb,
     estimate: Rgb,
 }
 
-impl PartialEq for Entry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Entry {
-    fn cmp(&self, o: &Self) -> Ordering {
-        self.bound.total_cmp(&o.bound).then(o.node.cmp(&self.node))
-    }
-}
+type Entry = Keyed<Sampled>;
 
 /// Reusable heap for [`lightcut`] (one per thread: the per-segment loop allocates nothing once
 /// it has grown).
@@ -110,17 +94,16 @@ pub fn lightcut(
     heap.clear();
     let est = scaled(root, c);
     heap.push(Entry {
-        bound: oracle.bound(tree.root, root),
+        key: oracle.bound(tree.root, root),
         node: tree.root,
-        contribution: c,
-        estimate: est,
+        data: Sampled { contribution: c, estimate: est },
     });
     let mut total = est;
     let mut leaf_sum = Rgb::ZERO;
     let mut leaves = 0u32;
     let mut hit_max = false;
     while let Some(top) = heap.peek() {
-        if top.bound <= settings.epsilon * total.max_component() {
+        if top.key <= settings.epsilon * total.max_component() {
             break;
         }
         if heap.len() as u32 + leaves >= settings.max_cut {
@@ -128,11 +111,11 @@ pub fn lightcut(
             break;
         }
         let top = heap.pop().expect("peeked");
-        total = total - top.estimate;
+        total = total - top.data.estimate;
         let node = &nodes[top.node as usize];
         for child in [node.left, node.right] {
             let cn = &nodes[child as usize];
-            let cc = if cn.rep == node.rep { top.contribution } else { oracle.contribution(cn.rep) };
+            let cc = if cn.rep == node.rep { top.data.contribution } else { oracle.contribution(cn.rep) };
             let ce = scaled(cn, cc);
             total += ce;
             if cn.is_leaf() {
@@ -140,15 +123,14 @@ pub fn lightcut(
                 leaves += 1;
             } else {
                 heap.push(Entry {
-                    bound: oracle.bound(child, cn),
+                    key: oracle.bound(child, cn),
                     node: child,
-                    contribution: cc,
-                    estimate: ce,
+                    data: Sampled { contribution: cc, estimate: ce },
                 });
             }
         }
     }
     // Sum the final cut afresh rather than trusting the running total's rounding.
-    let sum = heap.iter().fold(leaf_sum, |acc, e| acc + e.estimate);
+    let sum = heap.iter().fold(leaf_sum, |acc, e| acc + e.data.estimate);
     (sum, CutStats { size: heap.len() as u32 + leaves, hit_max })
 }

@@ -1,11 +1,11 @@
 //! The stochastic cut's importance of a light cluster for one camera segment: a cheap,
-//! always finite *estimate* of the cluster's contribution (not a bound; docs/lightcuts.md,
-//! "Stochastic cut"). It only steers probabilities, so any error in it costs variance, never
-//! bias, as long as it is positive wherever a light can contribute.
+//! always finite *estimate* of the cluster's contribution (not a bound; `docs/theory.md` §11,
+//! (T24); docs/lightcuts.md, "Stochastic cut"). It only steers probabilities, so any error in
+//! it costs variance, never bias, as long as it is positive wherever a light can contribute.
 //!
 //! For a light point `y` at distance `h` from the camera's line, the camera-side integral of
 //! the estimators is exactly `Int_0^s du / w(u)^2 = Theta(y) / h` (`Theta` the angle the
-//! camera segment subtends from `y`; docs/theory.md, VPL estimator). We evaluate it at the
+//! camera segment subtends from `y`; `docs/theory.md` (T9), (T13)). We evaluate it at the
 //! cluster's box centre `c` with two cheap upper bounds instead of the angle,
 //!
 //! ```text

@@ -11,6 +11,7 @@ pub mod bound;
 pub mod build;
 pub mod cone;
 pub mod cut;
+mod heap;
 pub mod importance;
 pub mod lights;
 pub mod stochastic;

@@ -21,11 +21,11 @@
 //! The random numbers of a descent come from a hash of the segment key and the cut node, so the
 //! result does not depend on evaluation order or thread count.
 
+use super::heap::Keyed;
 use super::LightTree;
 use glam::Vec3;
 use haze_core::rng::mix64;
 use haze_core::Rgb;
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 /// Settings of the stochastic cut.
@@ -219,28 +219,8 @@ pub fn left_probability(left: &SampleNode, right: &SampleNode, i_left: f32, i_ri
     }
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    importance: f32,
-    node: u32,
-}
-
-impl PartialEq for Entry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Entry {
-    fn cmp(&self, o: &Self) -> Ordering {
-        self.importance.total_cmp(&o.importance).then(o.node.cmp(&self.node))
-    }
-}
+/// A frontier node keyed by its importance.
+type Entry = Keyed;
 
 /// Reusable buffers of [`stochastic_cut`] (one per thread: nothing is allocated per segment
 /// once they have grown).
@@ -275,7 +255,7 @@ pub fn select_cut<'s>(
         cut.push(0);
         return cut;
     }
-    heap.push(Entry { importance: importance(root), node: 0 });
+    heap.push(Entry::new(importance(root), 0));
     // `cut` holds the leaves reached so far; the heap the inner nodes.
     while heap.len() + cut.len() < cut_size.max(1) as usize {
         let Some(top) = heap.pop() else { break };
@@ -284,7 +264,7 @@ pub fn select_cut<'s>(
             if c.is_leaf() {
                 cut.push(child);
             } else {
-                heap.push(Entry { importance: importance(c), node: child });
+                heap.push(Entry::new(importance(c), child));
             }
         }
     }

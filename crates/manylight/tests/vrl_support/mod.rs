@@ -5,6 +5,8 @@
 
 use glam::Quat;
 use haze_core::{Phase, Rgb, Sampler, Vec3};
+use haze_manylight::vrl::sampling::{equiangular_pdf, sample_equiangular};
+use haze_manylight::vrl::Segment;
 
 pub type Rgb64 = [f64; 3];
 
@@ -115,6 +117,48 @@ pub fn check(name: &str, mc: &McResult, reference: Rgb64) -> (bool, String) {
         if ok { "ok" } else { "FAIL" }
     );
     (ok, row)
+}
+
+/// Runs `est` of every case (in parallel, case `i` seeded `seed + i`) until the relative
+/// standard error is below 0.1% (or `n_max` samples), so that passing the 4-SE rule of
+/// [`check`] also keeps the error within about 0.4%; returns the verdicts and table rows.
+pub fn run_cases<C: Sync>(
+    cases: &[C],
+    name: impl Fn(&C) -> &str + Sync,
+    reference: impl Fn(&C) -> Rgb64 + Sync,
+    est: impl Fn(&C, &mut Sampler) -> Rgb + Sync,
+    seed: u64,
+    n_max: usize,
+) -> Vec<(bool, String)> {
+    use rayon::prelude::*;
+    cases
+        .par_iter()
+        .enumerate()
+        .map(|(i, case)| {
+            let mc = monte_carlo(|s| est(case, s), seed + i as u64, 1e-3, n_max);
+            check(name(case), &mc, reference(case))
+        })
+        .collect()
+}
+
+/// The library's `f32` integrand `f` agrees with the independent `f64` one `r` to 0.1% in
+/// every channel.
+pub fn assert_matches_f64(f: Rgb, r: Rgb64, name: &str) {
+    for ch in 0..3 {
+        assert!((f[ch] as f64 - r[ch]).abs() <= 1e-3 * r[ch], "{name}: {f} vs {r:?}");
+    }
+}
+
+/// A camera distance `t` drawn equiangularly towards `point` from the segment `cam` with the
+/// uniform number `u`, and its pdf (per unit length); `uniform_pdf` replaces the pdf by the
+/// uniform `1/len` (a wrong pdf, for negative controls).
+pub fn equiangular_towards(cam: &Segment, point: Vec3, u: f32, uniform_pdf: bool) -> (f32, f32) {
+    let r = point - cam.o;
+    let delta = r.dot(cam.d);
+    let h = (r - delta * cam.d).length();
+    let t = sample_equiangular(u, delta, h, 0.0, cam.len).expect("a camera segment of positive length");
+    let pdf = if uniform_pdf { 1.0 / cam.len } else { equiangular_pdf(t, delta, h, 0.0, cam.len) };
+    (t, pdf)
 }
 
 pub fn table_header() -> String {

@@ -1,11 +1,11 @@
 //! Shadow rays through media and index-matched (`null`) boundaries.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use haze_core::ray::offset_origin;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb};
 use haze_scene::accel::{ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
-use haze_scene::{MediumId, Scene};
+use haze_scene::{Bsdf, MediumId, Scene};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
 /// occluder: `t_max = |y - o| (1 - SHADOW_EPSILON)`. haze has used `1e-4` since the first
@@ -50,17 +50,7 @@ pub fn transmittance_to(
     // One traversal for the whole shadow ray: it stops at the first blocker found, else returns
     // the null boundaries and thin dielectrics on the segment, crossed here in `t` order with
     // the optical depth summed over them (one `exp` at the end instead of one per segment).
-    let ray = match target {
-        Some(y) => {
-            let v = y - origin;
-            let len = v.length();
-            if len == 0.0 || v.dot(d) <= 0.0 {
-                return Rgb::ONE;
-            }
-            Ray { o: origin, d: v / len, t_max: len * (1.0 - SHADOW_EPSILON) }
-        }
-        None => Ray { o: origin, d, t_max: f32::INFINITY },
-    };
+    let Some(ray) = shadow_ray(origin, target, d) else { return Rgb::ONE };
     let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];
     let n = match scene.shadow_hits(&ray, &mut hits) {
         ShadowQuery::Blocked => return Rgb::ZERO,
@@ -80,12 +70,9 @@ pub fn transmittance_to(
         last = h.t;
         let si = scene.shadow_interaction(h);
         let shape = &scene.shapes[si.shape as usize];
-        if !shape.bsdf.is_null() {
-            let wi = Frame::from_normal(si.ns).to_local(-ray.d);
-            tr *= shape.bsdf.null_transmission(wi, si.uv);
-            if tr.is_black() {
-                return Rgb::ZERO;
-            }
+        tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
+        if tr.is_black() {
+            return Rgb::ZERO;
         }
         medium = shape.medium_towards(ray.d, si.n, medium);
     }
@@ -98,6 +85,37 @@ pub fn transmittance_to(
         }
     }
     tr * exp_neg(tau)
+}
+
+/// The shadow segment from `origin`: towards the target `y` when there is one, aimed from
+/// `origin` and ending at `|y - origin| (1 - SHADOW_EPSILON)` (Mitsuba 3's `spawn_ray_to`, see
+/// [`transmittance_to`]), else along `d` to infinity. `None` when the target is at or behind
+/// `origin` (an offset past it, e.g. a null surface at the light itself): nothing is between.
+#[inline]
+fn shadow_ray(origin: Vec3, target: Option<Vec3>, d: Vec3) -> Option<Ray> {
+    match target {
+        Some(y) => {
+            let v = y - origin;
+            let len = v.length();
+            if len == 0.0 || v.dot(d) <= 0.0 {
+                return None;
+            }
+            Some(Ray { o: origin, d: v / len, t_max: len * (1.0 - SHADOW_EPSILON) })
+        }
+        None => Some(Ray { o: origin, d, t_max: f32::INFINITY }),
+    }
+}
+
+/// What a shadow ray along `d` keeps of its throughput crossing a surface with `bsdf`, shading
+/// normal `ns`: 1 for `null`, a thin dielectric's transmittance (Mitsuba's
+/// `eval_null_transmission`), 0 for any other surface (it blocks).
+#[inline]
+fn crossing_factor(bsdf: &Bsdf, d: Vec3, ns: Vec3, uv: Vec2) -> Rgb {
+    if bsdf.is_null() {
+        Rgb::ONE
+    } else {
+        bsdf.null_transmission(Frame::from_normal(ns).to_local(-d), uv)
+    }
 }
 
 /// `exp(-tau)` per channel, with a single `exp` when the channels are equal (grey media).
@@ -125,19 +143,7 @@ fn transmittance_segments(
 ) -> Rgb {
     let mut tr = Rgb::ONE;
     for _ in 0..256 {
-        let ray = match target {
-            Some(y) => {
-                let v = y - origin;
-                let len = v.length();
-                // An offset past the target (a null surface at the light itself) leaves no
-                // segment: nothing is in between.
-                if len == 0.0 || v.dot(d) <= 0.0 {
-                    return tr;
-                }
-                Ray { o: origin, d: v / len, t_max: len * (1.0 - SHADOW_EPSILON) }
-            }
-            None => Ray { o: origin, d, t_max: f32::INFINITY },
-        };
+        let Some(ray) = shadow_ray(origin, target, d) else { return tr };
         let hit = scene.intersect(&ray);
         let seg = hit.map_or(ray.t_max, |h| h.t);
         if let Some(m) = medium {
@@ -148,13 +154,9 @@ fn transmittance_segments(
         }
         let Some(h) = hit else { return tr };
         let shape = &scene.shapes[h.shape as usize];
-        if !shape.bsdf.is_null() {
-            // A thin dielectric passes light with its transmittance; other surfaces block.
-            let wi = Frame::from_normal(h.ns).to_local(-ray.d);
-            tr *= shape.bsdf.null_transmission(wi, h.uv);
-            if tr.is_black() {
-                return Rgb::ZERO;
-            }
+        tr *= crossing_factor(&shape.bsdf, ray.d, h.ns, h.uv);
+        if tr.is_black() {
+            return Rgb::ZERO;
         }
         medium = shape.medium_towards(ray.d, h.n, medium);
         origin = offset_origin(h.p, h.n, ray.d);
