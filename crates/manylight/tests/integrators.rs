@@ -23,8 +23,11 @@ const W: u32 = 24;
 const H: u32 = 18;
 
 fn load_small(name: &str) -> Scene {
-    let mut scene =
-        load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
+    load_small_path(&validation_scene(name))
+}
+
+fn load_small_path(path: &std::path::Path) -> Scene {
+    let mut scene = load_file(path, &LoadOptions::default()).expect("scene loads");
     scene.camera.width = W;
     scene.camera.height = H;
     scene
@@ -263,4 +266,33 @@ fn foggy_room_stochastic_lightcuts_match_mitsuba() {
 #[test]
 fn hg_box_stochastic_lightcuts_match_mitsuba() {
     check_stochastic_against_mitsuba("hg-box", 300, 64);
+}
+
+/// The whole image of `vrl` and `vpl` (camera chains through the glass ball, gathering at
+/// surfaces, the continuation through delta chains: `docs/theory.md` §2.1) against `volpath`,
+/// every component, on a small hazy room with grey walls, a glass ball and a small area light.
+fn check_whole_against_volpath(scene: &Scene, paths: u64, passes: u32, perturb: Option<f32>) -> Vec<String> {
+    let reference = render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, 512, 11);
+    let vrl = render_passes(scene, &VrlIntegrator::new(scene, settings(scene, paths), 1).unwrap(), passes, 1, 1);
+    let vpl =
+        render_passes(scene, &VplIntegrator::new(scene, settings(scene, paths), 2, None).unwrap(), passes, 1, 2);
+    let mut failures = Vec::new();
+    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+        for comp in Component::ALL {
+            let (r, mean_z) = compare(f, &reference, comp);
+            println!("{method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
+            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
+                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
+            }
+        }
+    }
+    let _ = perturb;
+    failures
+}
+
+#[test]
+fn glass_ball_room_whole_image_matches_volpath() {
+    let scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml"));
+    let failures = check_whole_against_volpath(&scene, 30, 96, None);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

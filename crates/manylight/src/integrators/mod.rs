@@ -77,6 +77,89 @@ pub(crate) fn connect(scene: &Scene, from: MediumId, y: glam::Vec3, x: glam::Vec
     transmittance_to(scene, y, None, v / dist, dist, Some(from))
 }
 
+/// Transmittance and visibility from the surface VPL `vpl` to a point `x` (the origin offset
+/// off the surface, the medium of the side the connection leaves by).
+#[inline]
+pub(crate) fn connect_surface(scene: &Scene, vpl: &crate::vpl::SurfaceVpl, x: glam::Vec3) -> haze_core::Rgb {
+    let v = x - vpl.p;
+    let dist = v.length();
+    if dist <= 0.0 {
+        return haze_core::Rgb::ZERO;
+    }
+    let d = v / dist;
+    let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+    transmittance_to(scene, vpl.p, Some(vpl.n), d, dist, medium)
+}
+
+/// The surface VPLs of a light set in the form the estimators take.
+pub(crate) fn surface_vpls(set: &LightSet) -> Vec<crate::vpl::SurfaceVpl> {
+    set.surface_vpls
+        .iter()
+        .map(|r| {
+            let frame = haze_core::Frame::from_normal(r.ns);
+            crate::vpl::SurfaceVpl {
+                p: r.p,
+                n: r.n,
+                frame,
+                w_prev: frame.to_local(r.w_prev),
+                flux: r.flux,
+                shape: r.shape,
+                uv: r.uv,
+                medium: r.medium,
+            }
+        })
+        .collect()
+}
+
+/// Index offset of surface VPLs in `light_uniforms`, so that they draw numbers of their own.
+pub(crate) const SURFACE_VPL_STREAM: u32 = 0x8000_0000;
+
+/// The surface VPLs' light at a camera segment (T12c) and at a gathering point (T12d).
+pub(crate) fn surface_vpls_to_segment(
+    scene: &Scene,
+    vpls: &[crate::vpl::SurfaceVpl],
+    cs: &CameraSegment,
+    cam_medium: &VrlMedium,
+    key: u64,
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let mut sum = haze_core::Rgb::ZERO;
+    for (i, vpl) in vpls.iter().enumerate() {
+        let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+        sum += crate::vpl::sample_point_light_to_segment(
+            &cs.seg,
+            cam_medium,
+            vpl.p,
+            |w| vpl.intensity(bsdf, w),
+            light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
+            clamp,
+            |_, x| connect_surface(scene, vpl, x),
+        );
+    }
+    sum
+}
+
+pub(crate) fn surface_vpls_to_point(
+    scene: &Scene,
+    vpls: &[crate::vpl::SurfaceVpl],
+    gp: &crate::gather::GatherPoint,
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let mut sum = haze_core::Rgb::ZERO;
+    for vpl in vpls {
+        let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+        sum += crate::vpl::point_light_to_point(
+            gp.p,
+            |d| gp.reflectance(d),
+            vpl.p,
+            |w| vpl.intensity(bsdf, w),
+            clamp,
+            |_, x| connect_surface(scene, vpl, x),
+        );
+    }
+    sum
+}
+
 thread_local! {
     /// Per-thread camera-segment buffer: the per-pixel hot loop allocates nothing.
     pub(crate) static SEGMENTS: RefCell<Vec<CameraSegment>> = RefCell::new(Vec::with_capacity(crate::camera::MAX_SEGMENTS));
