@@ -23,6 +23,11 @@ pub struct VrlIntegrator {
     settings: ManyLightSettings,
     /// `Some(c)`: clamp the `1/d^2` of surface-VPL connections at `c` (biased).
     pub clamp: Option<f32>,
+    /// Scale of the virtual lights' light at gathering surface points (VRL -> surface point and
+    /// surface VPL -> surface point): 1, except in the negative control of the whole-image
+    /// z-test (`crates/manylight/tests/integrators.rs`), which must fail when it is off.
+    #[doc(hidden)]
+    pub gather_point_scale: f32,
     tracer: PassTracer,
     /// Camera segment x VRL evaluations so far (for `haze bench`).
     evaluations: AtomicU64,
@@ -43,6 +48,7 @@ impl VrlIntegrator {
         Ok(VrlIntegrator {
             settings,
             clamp: None,
+            gather_point_scale: 1.0,
             tracer: PassTracer::new(paths),
             evaluations: AtomicU64::new(0),
         })
@@ -111,7 +117,7 @@ impl Gather for VrlGather<'_> {
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
-        let mut sum = surface_vpls_to_point(scene, &pass.surface_vpls, gp, self.integrator.clamp);
+        let mut sum = Rgb::ZERO;
         for (i, vrl) in pass.groups.iter().flatten().enumerate() {
             sum += sample_vrl_to_point(
                 gp.p,
@@ -122,7 +128,8 @@ impl Gather for VrlGather<'_> {
                 |y, x| connect(scene, vrl.medium, y, x),
             );
         }
-        sum
+        (sum + surface_vpls_to_point(scene, &pass.surface_vpls, gp, self.integrator.clamp))
+            * self.integrator.gather_point_scale
     }
 }
 
