@@ -14,7 +14,6 @@ use haze_manylight::vpl::{point_light_to_point, sample_point_light_to_segment, S
 use haze_manylight::vrl::surface::sample_vrl_to_point;
 use haze_manylight::vrl::{Segment, Vrl, VrlMedium};
 use haze_scene::{Bsdf, Texture};
-use haze_testkit::quadrature::integrate_channels;
 use vrl_support::*;
 
 /// How a receiver's or light's cosine lobe is (mis)computed by the estimator under test.
@@ -111,7 +110,7 @@ impl VrlCase {
         let (st_l, ss_l, sc) =
             (rgb64(self.medium.sigma_t), rgb64(self.medium.sigma_s), rgb64(self.sigma_conn));
         let breaks: Vec<f64> = [foot].into_iter().filter(|f| *f > 0.0 && *f < len).collect();
-        integrate_channels(
+        integrate(
             |v| {
                 let y: [f64; 3] = std::array::from_fn(|i| o[i] + v * d[i]);
                 let r: [f64; 3] = std::array::from_fn(|i| x[i] - y[i]);
@@ -237,7 +236,7 @@ impl SegCase {
         let (st, ss, sc) =
             (rgb64(self.cam_medium.sigma_t), rgb64(self.cam_medium.sigma_s), rgb64(self.sigma_conn));
         let breaks: Vec<f64> = [foot].into_iter().filter(|f| *f > 0.0 && *f < len).collect();
-        integrate_channels(
+        integrate(
             |u| {
                 let x: [f64; 3] = std::array::from_fn(|i| o[i] + u * d[i]);
                 let r: [f64; 3] = std::array::from_fn(|i| x[i] - p[i]);
