@@ -60,12 +60,15 @@ pub enum Method {
 
 impl Method {
     /// Builds the integrator `name` for `scene`. Many-light methods fix their light-path count
-    /// here (a pilot light-tracing run for `LightBudget::Vrls`) and print the surface warning
-    /// of `surface_warning` to stderr.
+    /// here (a pilot light-tracing run for `LightBudget::Vrls`); the lightcut methods, which do
+    /// not gather at surfaces yet (`docs/theory.md` §2.1), print the warning of
+    /// `surface_warning` to stderr.
     pub fn build(scene: &Scene, kind: MethodKind, options: &MethodOptions, seed: u64) -> Result<Method> {
         let many_light = || {
-            if let Some(w) = surface_warning(scene) {
-                eprintln!("warning: {w}");
+            if matches!(kind, MethodKind::VrlLightcuts | MethodKind::VplLightcuts) {
+                if let Some(w) = surface_warning(scene) {
+                    eprintln!("warning: {w}");
+                }
             }
             ManyLightSettings {
                 budget: options.budget,

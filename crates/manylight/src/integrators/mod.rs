@@ -165,8 +165,8 @@ thread_local! {
     pub(crate) static SEGMENTS: RefCell<Vec<CameraSegment>> = RefCell::new(Vec::with_capacity(crate::camera::MAX_SEGMENTS));
 }
 
-/// Warns once per render if the scene has surfaces whose scattered light the many-light
-/// integrators do not estimate yet.
+/// Warns once per render if the scene has surfaces whose scattered light the lightcut
+/// integrators do not estimate yet (`vrl` and `vpl` render it: `docs/theory.md` §2.1).
 pub fn surface_warning(scene: &Scene) -> Option<String> {
     let n = scene
         .shapes
@@ -177,9 +177,10 @@ pub fn surface_warning(scene: &Scene) -> Option<String> {
         .count();
     (n > 0).then(|| {
         format!(
-            "{n} shape(s) have scattering (non-black, non-null) surfaces: the many-light integrators render \
+            "{n} shape(s) have scattering (non-black, non-null) surfaces: the lightcut integrators render \
              light that camera rays see in media and directly, not light that camera rays receive from \
-             surfaces (the `surface` component is only the part carried by VRLs/VPLs after a surface bounce)"
+             surfaces (the `surface` component is only the part carried by VRLs/VPLs after a surface \
+             bounce); vrl and vpl render the whole image"
         )
     })
 }
