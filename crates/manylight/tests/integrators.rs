@@ -312,3 +312,38 @@ fn glass_ball_room_whole_image_matches_volpath() {
         "the missing light at gathering points went unnoticed"
     );
 }
+
+/// `vrl` and `vpl` against `volpath`, every component, on the peer scene
+/// `tof-cbox-volumetric/small.xml` (a Cornell box of diffuse walls with two boxes of dense
+/// media behind null boundaries) at 16 x 16 pixels, with `max_depth` lifted so that the depth
+/// limits of the two kinds of paths do not differ. Skipped (one line) without the peer data.
+#[test]
+fn peer_cbox_whole_image_matches_volpath() {
+    let Some(dir) = haze_testkit::data::peers_or_skip() else { return };
+    let options = LoadOptions { defines: vec![("max_depth".into(), "-1".into())] };
+    let mut scene =
+        load_file(&dir.join("tof-cbox-volumetric/small.xml"), &options).expect("peer scene loads");
+    (scene.camera.width, scene.camera.height) = (16, 16);
+    let (paths, passes) = (20, 40);
+    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
+    let vrl =
+        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
+    let vpl = render_passes(
+        &scene,
+        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
+        passes,
+        1,
+        2,
+    );
+    let mut failures = Vec::new();
+    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+        for comp in Component::ALL {
+            let (r, mean_z) = compare(f, &reference, comp);
+            println!("cbox {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
+            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
+                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
