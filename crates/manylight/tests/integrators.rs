@@ -115,7 +115,7 @@ fn check_against_volpath(name: &str, paths: u64, passes: u32) {
     );
     let mut failures = Vec::new();
     for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
-        for comp in [Component::Single, Component::Multiple, Component::Emitted] {
+        for comp in Component::ALL {
             let (r, mean_z) = compare(f, &reference, comp);
             println!("{name} {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
             if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
