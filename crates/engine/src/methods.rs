@@ -20,6 +20,8 @@ pub struct MethodOptions {
     pub budget: LightBudget,
     /// vpl only: clamp of the geometry term (biased).
     pub vpl_clamp: Option<f32>,
+    /// vrl and vpl: clamp of the `1/d^2` of surface connections (biased).
+    pub clamp: Option<f32>,
     pub lightcuts: LightcutSettings,
 }
 
@@ -77,8 +79,16 @@ impl Method {
         };
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
-            MethodKind::Vrl => Method::Vrl(VrlIntegrator::new(scene, many_light(), seed)?),
-            MethodKind::Vpl => Method::Vpl(VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?),
+            MethodKind::Vrl => {
+                let mut i = VrlIntegrator::new(scene, many_light(), seed)?;
+                i.clamp = options.clamp;
+                Method::Vrl(i)
+            }
+            MethodKind::Vpl => {
+                let mut i = VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?;
+                i.surface_clamp = options.clamp;
+                Method::Vpl(i)
+            }
             MethodKind::VrlLightcuts => {
                 Method::VrlLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
             }
