@@ -4,8 +4,8 @@
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{
-    surface_warning, CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator,
-    ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator, Vrls,
+    CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
+    VplIntegrator, Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -62,20 +62,11 @@ pub enum Method {
 
 impl Method {
     /// Builds the integrator `name` for `scene`. Many-light methods fix their light-path count
-    /// here (a pilot light-tracing run for `LightBudget::Vrls`); the lightcut methods, which do
-    /// not gather at surfaces yet (`docs/theory.md` §2.1), print the warning of
-    /// `surface_warning` to stderr.
+    /// here (a pilot light-tracing run for `LightBudget::Vrls`).
     pub fn build(scene: &Scene, kind: MethodKind, options: &MethodOptions, seed: u64) -> Result<Method> {
-        let many_light = || {
-            if matches!(kind, MethodKind::VrlLightcuts | MethodKind::VplLightcuts) {
-                if let Some(w) = surface_warning(scene) {
-                    eprintln!("warning: {w}");
-                }
-            }
-            ManyLightSettings {
-                budget: options.budget,
-                trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
-            }
+        let many_light = || ManyLightSettings {
+            budget: options.budget,
+            trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),

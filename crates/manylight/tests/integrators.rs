@@ -268,7 +268,7 @@ fn hg_box_stochastic_lightcuts_match_mitsuba() {
     check_stochastic_against_mitsuba("hg-box", 300, 64);
 }
 
-/// The whole image of `vrl` and `vpl` (camera chains through the glass ball, gathering at
+/// The whole image of `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` (camera chains through the glass ball, gathering at
 /// surfaces, the continuation through delta chains: `docs/theory.md` §2.1) against `volpath`,
 /// every component, on a small hazy room with grey walls, a glass ball and a small area light
 /// (`tests/data/glass-ball-room.xml`, 16 x 12 pixels). Negative control: without the virtual
@@ -291,8 +291,10 @@ fn glass_ball_room_whole_image_matches_volpath() {
         1,
         2,
     );
+    let (vrl_lc, vpl_lc) = lightcut_renders(&scene, paths, passes);
     let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+    for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
+    {
         for comp in Component::ALL {
             let (r, mean_z) = compare(f, &reference, comp);
             println!("{method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
@@ -313,7 +315,7 @@ fn glass_ball_room_whole_image_matches_volpath() {
     );
 }
 
-/// `vrl` and `vpl` against `volpath`, every component, on the peer scene
+/// `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` against `volpath`, every component, on the peer scene
 /// `tof-cbox-volumetric/small.xml` (a Cornell box of diffuse walls with two boxes of dense
 /// media behind null boundaries) at 16 x 16 pixels, with `max_depth` lifted so that the depth
 /// limits of the two kinds of paths do not differ. Skipped (one line) without the peer data.
@@ -335,8 +337,10 @@ fn peer_cbox_whole_image_matches_volpath() {
         1,
         2,
     );
+    let (vrl_lc, vpl_lc) = lightcut_renders(&scene, paths, passes);
     let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+    for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
+    {
         for comp in Component::ALL {
             let (r, mean_z) = compare(f, &reference, comp);
             println!("cbox {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
@@ -346,4 +350,20 @@ fn peer_cbox_whole_image_matches_volpath() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// `vrl_lightcuts` and `vpl_lightcuts` with the default settings (stochastic cut of one node;
+/// surface VPLs and gathering points by power sampling).
+fn lightcut_renders(scene: &Scene, paths: u64, passes: u32) -> (Passes, Passes) {
+    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    let (ml, lc) = (settings(scene, paths), LightcutSettings::default());
+    let a = render_passes(
+        scene,
+        &LightcutsIntegrator::<Vrls>::new(scene, ml.clone(), lc, 5).unwrap(),
+        passes,
+        1,
+        5,
+    );
+    let b = render_passes(scene, &LightcutsIntegrator::<Vpls>::new(scene, ml, lc, 6).unwrap(), passes, 1, 6);
+    (a, b)
 }

@@ -20,7 +20,6 @@ use crate::vrl::VrlMedium;
 use haze_render::integrators::transmittance_to;
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
-use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// How many light paths each pass traces.
@@ -160,31 +159,6 @@ pub(crate) fn surface_vpls_to_point(
     sum
 }
 
-thread_local! {
-    /// Per-thread camera-segment buffer: the per-pixel hot loop allocates nothing.
-    pub(crate) static SEGMENTS: RefCell<Vec<CameraSegment>> = RefCell::new(Vec::with_capacity(crate::camera::MAX_SEGMENTS));
-}
-
-/// Warns once per render if the scene has surfaces whose scattered light the lightcut
-/// integrators do not estimate yet (`vrl` and `vpl` render it: `docs/theory.md` §2.1).
-pub fn surface_warning(scene: &Scene) -> Option<String> {
-    let n = scene
-        .shapes
-        .iter()
-        .filter(|s| {
-            !s.bsdf.is_null() && !s.bsdf.is_black() && !matches!(s.bsdf, haze_scene::Bsdf::Dielectric { .. })
-        })
-        .count();
-    (n > 0).then(|| {
-        format!(
-            "{n} shape(s) have scattering (non-black, non-null) surfaces: the lightcut integrators render \
-             light that camera rays see in media and directly, not light that camera rays receive from \
-             surfaces (the `surface` component is only the part carried by VRLs/VPLs after a surface \
-             bounce); vrl and vpl render the whole image"
-        )
-    })
-}
-
 /// Two uniform numbers for light `light` from a per-camera-segment key: every light gets
 /// random numbers of its own, independent of the order in which lights are evaluated, so a
 /// lightcut that evaluates every leaf reproduces the brute-force sum exactly (up to the order
@@ -194,35 +168,6 @@ pub(crate) fn light_uniforms(key: u64, light: u32) -> glam::Vec2 {
     let h = haze_core::rng::mix64(key ^ haze_core::rng::mix64(light as u64 ^ 0x1f3d_5b79_a2c4_e6f1));
     let scale = 1.0 / (1u32 << 24) as f32;
     glam::Vec2::new((h >> 40) as f32 * scale, ((h >> 8) & 0xff_ffff) as f32 * scale)
-}
-
-/// The per-camera-ray skeleton every many-light integrator shares: split the ray into medium
-/// segments, add the light seen directly, then per segment single scattering and, for each of
-/// the two light groups (0: medium-only lights -> `multiple`, 1: lights after a surface bounce
-/// -> `surface`), the sum `lights(segment, key, group)` of the virtual lights. `key` seeds the
-/// per-light random numbers (`light_uniforms`); it is drawn right after single scattering, in
-/// the same order for every integrator, so their images can be compared sample for sample.
-pub(crate) fn many_light_radiance(
-    scene: &Scene,
-    ray: haze_core::Ray,
-    medium: Option<MediumId>,
-    sampler: &mut haze_core::Sampler,
-    mut lights: impl FnMut(&CameraSegment, u64, usize) -> haze_core::Rgb,
-) -> haze_render::PathRadiance {
-    use haze_render::Component;
-    SEGMENTS.with_borrow_mut(|segments| {
-        let mut out = haze_render::PathRadiance::default();
-        let path = crate::camera::trace_camera_ray(scene, ray, medium, segments);
-        out.add(Component::Emitted, path.emitted);
-        for cs in segments.iter() {
-            out.add(Component::Single, crate::single::single_scattering(scene, cs, sampler));
-            let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
-            for (group, comp) in [(0, Component::Multiple), (1, Component::Surface)] {
-                out.add(comp, cs.tr_before * lights(cs, key, group));
-            }
-        }
-        out
-    })
 }
 
 /// Light paths traced and virtual lights made, over the passes so far (for an integrator's
@@ -270,7 +215,7 @@ impl PassTracer {
     }
 }
 
-/// Splits light records into the two groups of [`many_light_radiance`].
+/// Splits light records into the two groups of `gather::Gather::segment` (medium-only, after a surface bounce).
 pub(crate) fn split_groups<R, L>(
     records: &[R],
     after_surface: impl Fn(&R) -> bool,

@@ -27,7 +27,7 @@ pub struct VplIntegrator {
     tracer: PassTracer,
 }
 
-/// The VPLs of one pass in the two groups of `many_light_radiance`.
+/// The VPLs of one pass in the two groups of `gather::Gather::segment`.
 pub struct VplPass {
     groups: [Vec<Vpl>; 2],
     surface_vpls: Vec<SurfaceVpl>,

@@ -33,7 +33,7 @@ pub struct VrlIntegrator {
     evaluations: AtomicU64,
 }
 
-/// The VRLs of one pass in the two groups of `many_light_radiance` (medium-only, after a
+/// The VRLs of one pass in the two groups of `gather::Gather::segment` (medium-only, after a
 /// surface bounce), so that the hot loop does not branch per light.
 pub struct VrlPass {
     groups: [Vec<Vrl>; 2],
