@@ -367,3 +367,28 @@ fn lightcut_renders(scene: &Scene, paths: u64, passes: u32) -> (Passes, Passes) 
     let b = render_passes(scene, &LightcutsIntegrator::<Vpls>::new(scene, ml, lc, 6).unwrap(), passes, 1, 6);
     (a, b)
 }
+
+/// `scenes/glass-beam.xml` (a spot light through a glass ball, a ceiling lamp, lit walls) renders
+/// with every integrator without a non-finite sample, with every component non-negative and
+/// the surface component present (walls lit).
+#[test]
+fn glass_beam_renders_with_every_integrator_without_nan() {
+    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    let mut scene = load_small_path(&haze_testkit::data::repo_root().join("scenes/glass-beam.xml"));
+    (scene.camera.width, scene.camera.height) = (16, 12);
+    let (ml, lc) = (settings(&scene, 20), LightcutSettings::default());
+    let films = [
+        render_passes(&scene, &VolPath::from_spec(&scene.integrator), 1, 4, 1).film,
+        render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 1).unwrap(), 4, 1, 1).film,
+        render_passes(&scene, &VplIntegrator::new(&scene, ml.clone(), 1, None).unwrap(), 4, 1, 1).film,
+        render_passes(&scene, &LightcutsIntegrator::<Vrls>::new(&scene, ml.clone(), lc, 1).unwrap(), 4, 1, 1)
+            .film,
+        render_passes(&scene, &LightcutsIntegrator::<Vpls>::new(&scene, ml, lc, 1).unwrap(), 4, 1, 1).film,
+    ];
+    for f in &films {
+        for comp in Component::ALL {
+            assert!(f.mean(Some(comp)).iter().all(|v| v.is_finite() && *v >= 0.0), "{}", comp.name());
+        }
+        assert!(f.image_mean(Some(Component::Surface)).iter().all(|v| *v > 0.0));
+    }
+}
