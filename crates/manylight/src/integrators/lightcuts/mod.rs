@@ -405,7 +405,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                 let ctx = ImportanceContext::new(cs.seg, cam_medium, pass.sigma_t_min);
                 let importance = |n: &SampleNode| ctx.importance(n);
                 let mut sum = Rgb::ZERO;
-                let descent_key = key ^ (0xa5a5_5a5a_0f0f_f0f0 * (group as u64 + 1));
+                let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
                 let size = stochastic_cut(
                     &forest.sample,
                     &importance,
