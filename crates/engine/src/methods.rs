@@ -4,8 +4,8 @@
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{
-    surface_warning, CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator,
-    ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator, Vrls,
+    CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
+    VplIntegrator, Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -20,6 +20,8 @@ pub struct MethodOptions {
     pub budget: LightBudget,
     /// vpl only: clamp of the geometry term (biased).
     pub vpl_clamp: Option<f32>,
+    /// vrl and vpl: clamp of the `1/d^2` of surface connections (biased).
+    pub clamp: Option<f32>,
     pub lightcuts: LightcutSettings,
 }
 
@@ -60,22 +62,24 @@ pub enum Method {
 
 impl Method {
     /// Builds the integrator `name` for `scene`. Many-light methods fix their light-path count
-    /// here (a pilot light-tracing run for `LightBudget::Vrls`) and print the surface warning
-    /// of `surface_warning` to stderr.
+    /// here (a pilot light-tracing run for `LightBudget::Vrls`).
     pub fn build(scene: &Scene, kind: MethodKind, options: &MethodOptions, seed: u64) -> Result<Method> {
-        let many_light = || {
-            if let Some(w) = surface_warning(scene) {
-                eprintln!("warning: {w}");
-            }
-            ManyLightSettings {
-                budget: options.budget,
-                trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
-            }
+        let many_light = || ManyLightSettings {
+            budget: options.budget,
+            trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
-            MethodKind::Vrl => Method::Vrl(VrlIntegrator::new(scene, many_light(), seed)?),
-            MethodKind::Vpl => Method::Vpl(VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?),
+            MethodKind::Vrl => {
+                let mut i = VrlIntegrator::new(scene, many_light(), seed)?;
+                i.clamp = options.clamp;
+                Method::Vrl(i)
+            }
+            MethodKind::Vpl => {
+                let mut i = VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?;
+                i.surface_clamp = options.clamp;
+                Method::Vpl(i)
+            }
             MethodKind::VrlLightcuts => {
                 Method::VrlLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
             }

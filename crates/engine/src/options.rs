@@ -452,6 +452,20 @@ pub const OPTIONS: &[OptionSpec] = &[
         get: |o| o.method.vpl_clamp.map(|c| c.to_string()),
     },
     OptionSpec {
+        name: "clamp",
+        kind: Kind::Positive,
+        default: Default::Unset("off (unbiased)"),
+        help: "Clamp the 1/d^2 of the connections to surface points and from surface VPLs at this \
+               value: fewer fireflies near corners, a biased preview (docs/theory.md 2.1).",
+        applies_to: &[Vrl, Vpl],
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "10",
+        set: |o, v| o.method.clamp = Some(v.float() as f32),
+        get: |o| o.method.clamp.map(|c| c.to_string()),
+    },
+    OptionSpec {
         name: "cut",
         kind: Kind::Choice(&["stochastic", "bound"]),
         default: Default::Value("stochastic"),
@@ -604,6 +618,7 @@ impl Options {
             method: MethodOptions {
                 budget: LightBudget::Vrls(1),
                 vpl_clamp: None,
+                clamp: None,
                 lightcuts: LightcutSettings::default(),
             },
         };

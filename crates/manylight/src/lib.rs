@@ -6,6 +6,7 @@
 //! - [`lighttrace`]: light tracing that turns light-path segments into VRLs and vertices into VPLs.
 
 pub mod camera;
+pub mod gather;
 pub mod integrators;
 pub mod lighttrace;
 mod memory;

@@ -1,5 +1,6 @@
 //! Light tracing into virtual lights: every medium segment of a light path becomes a virtual ray
-//! light (VRL) and every medium scattering vertex a virtual point light (VPL).
+//! light (VRL), every medium scattering vertex a virtual point light (VPL) and every non-delta
+//! surface vertex a surface VPL (`docs/theory.md` §2.1, §5.2).
 //!
 //! ## What is recorded, and why it is unbiased
 //! Free-flight distances are sampled from the hero channel's exponential with path-level
@@ -99,11 +100,30 @@ pub struct VplRecord {
     pub after_surface: bool,
 }
 
+/// A non-delta surface vertex of a light path (not the emitter's own point): a surface VPL.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceVplRecord {
+    pub p: Vec3,
+    /// Geometric normal (the shape's exterior side).
+    pub n: Vec3,
+    /// Shading normal.
+    pub ns: Vec3,
+    /// Unit direction from `p` towards the previous vertex of the light path.
+    pub w_prev: Vec3,
+    /// Light arriving at the vertex, in watts: `beta / mean(r)` before the BSDF.
+    pub flux: Rgb,
+    pub shape: u32,
+    pub uv: glam::Vec2,
+    /// The medium the light path arrived in (the shape decides the medium of each side).
+    pub medium: Option<MediumId>,
+}
+
 /// The virtual lights of one pass.
 #[derive(Clone, Debug, Default)]
 pub struct LightSet {
     pub vrls: Vec<VrlRecord>,
     pub vpls: Vec<VplRecord>,
+    pub surface_vpls: Vec<SurfaceVplRecord>,
     /// Light paths traced (the normalisation: every flux is already divided by it).
     pub paths: u64,
 }
@@ -157,9 +177,11 @@ pub fn trace_light_paths(
     let mut out = LightSet { paths, ..Default::default() };
     out.vrls.reserve(chunks.iter().map(|c| c.vrls.len()).sum());
     out.vpls.reserve(chunks.iter().map(|c| c.vpls.len()).sum());
+    out.surface_vpls.reserve(chunks.iter().map(|c| c.surface_vpls.len()).sum());
     for c in chunks {
         out.vrls.extend_from_slice(&c.vrls);
         out.vpls.extend_from_slice(&c.vpls);
+        out.surface_vpls.extend_from_slice(&c.surface_vpls);
     }
     Ok(out)
 }
@@ -271,6 +293,18 @@ fn trace_one(
         }
         if shape.bsdf.is_black() {
             return;
+        }
+        if !shape.bsdf.is_specular() {
+            out.surface_vpls.push(SurfaceVplRecord {
+                p: h.p,
+                n: h.n,
+                ns: h.ns,
+                w_prev: -ray.d,
+                flux: power * t / r.mean(),
+                shape: h.shape,
+                uv: h.uv,
+                medium,
+            });
         }
         let frame = haze_core::Frame::from_normal(h.ns);
         let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {

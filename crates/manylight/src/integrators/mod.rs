@@ -20,7 +20,6 @@ use crate::vrl::VrlMedium;
 use haze_render::integrators::transmittance_to;
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
-use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// How many light paths each pass traces.
@@ -77,28 +76,87 @@ pub(crate) fn connect(scene: &Scene, from: MediumId, y: glam::Vec3, x: glam::Vec
     transmittance_to(scene, y, None, v / dist, dist, Some(from))
 }
 
-thread_local! {
-    /// Per-thread camera-segment buffer: the per-pixel hot loop allocates nothing.
-    pub(crate) static SEGMENTS: RefCell<Vec<CameraSegment>> = RefCell::new(Vec::with_capacity(crate::camera::MAX_SEGMENTS));
+/// Transmittance and visibility from the surface VPL `vpl` to a point `x` (the origin offset
+/// off the surface, the medium of the side the connection leaves by).
+#[inline]
+pub(crate) fn connect_surface(scene: &Scene, vpl: &crate::vpl::SurfaceVpl, x: glam::Vec3) -> haze_core::Rgb {
+    let v = x - vpl.p;
+    let dist = v.length();
+    if dist <= 0.0 {
+        return haze_core::Rgb::ZERO;
+    }
+    let d = v / dist;
+    let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+    transmittance_to(scene, vpl.p, Some(vpl.n), d, dist, medium)
 }
 
-/// Warns once per render if the scene has surfaces whose scattered light the many-light
-/// integrators do not estimate yet.
-pub fn surface_warning(scene: &Scene) -> Option<String> {
-    let n = scene
-        .shapes
+/// The surface VPLs of a light set in the form the estimators take.
+pub(crate) fn surface_vpls(set: &LightSet) -> Vec<crate::vpl::SurfaceVpl> {
+    set.surface_vpls
         .iter()
-        .filter(|s| {
-            !s.bsdf.is_null() && !s.bsdf.is_black() && !matches!(s.bsdf, haze_scene::Bsdf::Dielectric { .. })
+        .map(|r| {
+            let frame = haze_core::Frame::from_normal(r.ns);
+            crate::vpl::SurfaceVpl {
+                p: r.p,
+                n: r.n,
+                frame,
+                w_prev: frame.to_local(r.w_prev),
+                flux: r.flux,
+                shape: r.shape,
+                uv: r.uv,
+                medium: r.medium,
+            }
         })
-        .count();
-    (n > 0).then(|| {
-        format!(
-            "{n} shape(s) have scattering (non-black, non-null) surfaces: the many-light integrators render \
-             light that camera rays see in media and directly, not light that camera rays receive from \
-             surfaces (the `surface` component is only the part carried by VRLs/VPLs after a surface bounce)"
-        )
-    })
+        .collect()
+}
+
+/// Index offset of surface VPLs in `light_uniforms`, so that they draw numbers of their own.
+pub(crate) const SURFACE_VPL_STREAM: u32 = 0x8000_0000;
+
+/// The surface VPLs' light at a camera segment (T12c) and at a gathering point (T12d).
+pub(crate) fn surface_vpls_to_segment(
+    scene: &Scene,
+    vpls: &[crate::vpl::SurfaceVpl],
+    cs: &CameraSegment,
+    cam_medium: &VrlMedium,
+    key: u64,
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let mut sum = haze_core::Rgb::ZERO;
+    for (i, vpl) in vpls.iter().enumerate() {
+        let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+        sum += crate::vpl::sample_point_light_to_segment(
+            &cs.seg,
+            cam_medium,
+            vpl.p,
+            |w| vpl.intensity(bsdf, w),
+            light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
+            clamp,
+            |_, x| connect_surface(scene, vpl, x),
+        );
+    }
+    sum
+}
+
+pub(crate) fn surface_vpls_to_point(
+    scene: &Scene,
+    vpls: &[crate::vpl::SurfaceVpl],
+    gp: &crate::gather::GatherPoint,
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let mut sum = haze_core::Rgb::ZERO;
+    for vpl in vpls {
+        let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+        sum += crate::vpl::point_light_to_point(
+            gp.p,
+            |d| gp.reflectance(d),
+            vpl.p,
+            |w| vpl.intensity(bsdf, w),
+            clamp,
+            |_, x| connect_surface(scene, vpl, x),
+        );
+    }
+    sum
 }
 
 /// Two uniform numbers for light `light` from a per-camera-segment key: every light gets
@@ -110,35 +168,6 @@ pub(crate) fn light_uniforms(key: u64, light: u32) -> glam::Vec2 {
     let h = haze_core::rng::mix64(key ^ haze_core::rng::mix64(light as u64 ^ 0x1f3d_5b79_a2c4_e6f1));
     let scale = 1.0 / (1u32 << 24) as f32;
     glam::Vec2::new((h >> 40) as f32 * scale, ((h >> 8) & 0xff_ffff) as f32 * scale)
-}
-
-/// The per-camera-ray skeleton every many-light integrator shares: split the ray into medium
-/// segments, add the light seen directly, then per segment single scattering and, for each of
-/// the two light groups (0: medium-only lights -> `multiple`, 1: lights after a surface bounce
-/// -> `surface`), the sum `lights(segment, key, group)` of the virtual lights. `key` seeds the
-/// per-light random numbers (`light_uniforms`); it is drawn right after single scattering, in
-/// the same order for every integrator, so their images can be compared sample for sample.
-pub(crate) fn many_light_radiance(
-    scene: &Scene,
-    ray: haze_core::Ray,
-    medium: Option<MediumId>,
-    sampler: &mut haze_core::Sampler,
-    mut lights: impl FnMut(&CameraSegment, u64, usize) -> haze_core::Rgb,
-) -> haze_render::PathRadiance {
-    use haze_render::Component;
-    SEGMENTS.with_borrow_mut(|segments| {
-        let mut out = haze_render::PathRadiance::default();
-        let path = crate::camera::trace_camera_ray(scene, ray, medium, segments);
-        out.add(Component::Emitted, path.emitted);
-        for cs in segments.iter() {
-            out.add(Component::Single, crate::single::single_scattering(scene, cs, sampler));
-            let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
-            for (group, comp) in [(0, Component::Multiple), (1, Component::Surface)] {
-                out.add(comp, cs.tr_before * lights(cs, key, group));
-            }
-        }
-        out
-    })
 }
 
 /// Light paths traced and virtual lights made, over the passes so far (for an integrator's
@@ -186,8 +215,8 @@ impl PassTracer {
     }
 }
 
-/// Splits light records into the two groups of [`many_light_radiance`] (in huge pages: the
-/// gather reads them at random, `crate::memory`).
+/// Splits light records into the two groups of `gather::Gather::segment` (medium-only, after a
+/// surface bounce), in huge pages: the gather reads them at random (`crate::memory`).
 pub(crate) fn split_groups<R, L>(
     records: &[R],
     after_surface: impl Fn(&R) -> bool,

@@ -1,11 +1,15 @@
-//! `vpl`: brute-force virtual point lights, every VPL of the pass evaluated for every camera
-//! segment with equiangular sampling of the camera point.
+//! `vpl`: brute-force virtual point lights, every medium and surface VPL of the pass evaluated
+//! for every gathering segment (equiangular sampling of the camera point) and every gathering
+//! surface point of the camera path (`docs/theory.md` §2.1).
 
 use super::{
-    connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
-    PassTracer,
+    connect, light_uniforms, media, paths_per_pass, split_groups, surface_vpls, surface_vpls_to_point,
+    surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
+use crate::camera::CameraSegment;
+use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::VplRecord;
+use crate::vpl::{point_light_to_point, SurfaceVpl};
 use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
@@ -17,12 +21,16 @@ pub struct VplIntegrator {
     settings: ManyLightSettings,
     /// `Some(c)`: clamp the VPL geometry term `1/w^2` at `c` (biased; see the estimator).
     pub clamp: Option<f32>,
+    /// `Some(c)`: clamp the `1/d^2` of connections to gathering points and of surface VPLs at
+    /// `c` (biased).
+    pub surface_clamp: Option<f32>,
     tracer: PassTracer,
 }
 
-/// The VPLs of one pass in the two groups of `many_light_radiance`.
+/// The VPLs of one pass in the two groups of `gather::Gather::segment`.
 pub struct VplPass {
     groups: [Vec<Vpl>; 2],
+    surface_vpls: Vec<SurfaceVpl>,
     media: Vec<VrlMedium>,
 }
 
@@ -34,7 +42,7 @@ impl VplIntegrator {
         clamp: Option<f32>,
     ) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
-        Ok(VplIntegrator { settings, clamp, tracer: PassTracer::new(paths) })
+        Ok(VplIntegrator { settings, clamp, surface_clamp: None, tracer: PassTracer::new(paths) })
     }
 }
 
@@ -46,9 +54,11 @@ impl Integrator for VplIntegrator {
     }
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> VplPass {
-        let set = self.tracer.trace(scene, seed, pass, &self.settings.trace, |s| s.vpls.len());
+        let set = self
+            .tracer
+            .trace(scene, seed, pass, &self.settings.trace, |s| s.vpls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
-        VplPass { groups, media: media(scene) }
+        VplPass { groups, surface_vpls: surface_vpls(&set), media: media(scene) }
     }
 
     fn radiance(
@@ -59,29 +69,70 @@ impl Integrator for VplIntegrator {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
-            let cam_medium = &pass.media[cs.medium as usize];
+        whole_path_radiance(scene, ray, medium, sampler, &VplGather { integrator: self, scene, pass })
+    }
+
+    fn summary(&self) -> Option<String> {
+        Some(format!(
+            "vpl: {}{}",
+            self.tracer.summary("VPLs and surface VPLs"),
+            if self.clamp.is_some() { "; geometry term clamped: the image is biased" } else { "" }
+        ))
+    }
+}
+
+/// The VPL integrator's side of the camera walk.
+struct VplGather<'a> {
+    integrator: &'a VplIntegrator,
+    scene: &'a Scene,
+    pass: &'a VplPass,
+}
+
+impl Gather for VplGather<'_> {
+    fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
+        let (scene, pass) = (self.scene, self.pass);
+        let cam_medium = &pass.media[cs.medium as usize];
+        let sums = [0, 1].map(|g| {
             let mut sum = Rgb::ZERO;
-            for (i, vpl) in pass.groups[group].iter().enumerate() {
+            for (i, vpl) in pass.groups[g].iter().enumerate() {
                 sum += sample_vpl_contribution(
                     &cs.seg,
                     cam_medium,
                     vpl,
                     &pass.media[vpl.medium as usize].phase,
                     light_uniforms(key, i as u32).x,
-                    self.clamp,
+                    self.integrator.clamp,
                     |y, x| connect(scene, vpl.medium, y, x),
                 );
             }
             sum
-        })
+        });
+        let surface = surface_vpls_to_segment(
+            scene,
+            &pass.surface_vpls,
+            cs,
+            cam_medium,
+            key,
+            self.integrator.surface_clamp,
+        );
+        [sums[0], sums[1] + surface]
     }
 
-    fn summary(&self) -> Option<String> {
-        Some(format!(
-            "vpl: {}{}",
-            self.tracer.summary("VPLs"),
-            if self.clamp.is_some() { "; geometry term clamped: the image is biased" } else { "" }
-        ))
+    fn point(&self, gp: &GatherPoint, _key: u64) -> Rgb {
+        let (scene, pass) = (self.scene, self.pass);
+        let clamp = self.integrator.surface_clamp;
+        let mut sum = surface_vpls_to_point(scene, &pass.surface_vpls, gp, clamp);
+        for vpl in pass.groups.iter().flatten() {
+            let phase = &pass.media[vpl.medium as usize].phase;
+            sum += point_light_to_point(
+                gp.p,
+                |d| gp.reflectance(d),
+                vpl.p,
+                |n| vpl.flux * phase.eval(vpl.d_in, n),
+                clamp,
+                |y, x| connect(scene, vpl.medium, y, x),
+            );
+        }
+        sum
     }
 }

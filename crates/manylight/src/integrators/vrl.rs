@@ -1,12 +1,17 @@
-//! `vrl`: brute-force virtual ray lights, every VRL of the pass evaluated for every camera
-//! segment with the joint importance sampling of Novak et al. 2012.
+//! `vrl`: brute-force virtual ray lights, every VRL and surface VPL of the pass evaluated for
+//! every gathering segment (the joint importance sampling of Novak et al. 2012 for VRLs) and
+//! every gathering surface point of the camera path (`docs/theory.md` §2.1).
 
 use super::{
-    connect, light_uniforms, many_light_radiance, media, paths_per_pass, split_groups, ManyLightSettings,
-    PassTracer,
+    connect, light_uniforms, media, paths_per_pass, split_groups, surface_vpls, surface_vpls_to_point,
+    surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
+use crate::camera::CameraSegment;
+use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::VrlRecord;
+use crate::vpl::SurfaceVpl;
 use crate::vrl::estimator::{contributes, point_pair_estimate, sample_point_pair, PointPair};
+use crate::vrl::surface::sample_vrl_to_point;
 use crate::vrl::{Segment, Vrl, VrlMedium};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
@@ -16,15 +21,23 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 pub struct VrlIntegrator {
     settings: ManyLightSettings,
+    /// `Some(c)`: clamp the `1/d^2` of surface-VPL connections at `c` (biased).
+    pub clamp: Option<f32>,
+    /// Scale of the virtual lights' light at gathering surface points (VRL -> surface point and
+    /// surface VPL -> surface point): 1, except in the negative control of the whole-image
+    /// z-test (`crates/manylight/tests/integrators.rs`), which must fail when it is off.
+    #[doc(hidden)]
+    pub gather_point_scale: f32,
     tracer: PassTracer,
     /// Camera segment x VRL evaluations so far (for `haze bench`).
     evaluations: AtomicU64,
 }
 
-/// The VRLs of one pass in the two groups of `many_light_radiance` (medium-only, after a
+/// The VRLs of one pass in the two groups of `gather::Gather::segment` (medium-only, after a
 /// surface bounce), so that the hot loop does not branch per light.
 pub struct VrlPass {
     groups: [Vec<Vrl>; 2],
+    surface_vpls: Vec<SurfaceVpl>,
     media: Vec<VrlMedium>,
 }
 
@@ -32,7 +45,13 @@ impl VrlIntegrator {
     /// Fails if an emitter cannot start light paths (`constant`).
     pub fn new(scene: &Scene, settings: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
-        Ok(VrlIntegrator { settings, tracer: PassTracer::new(paths), evaluations: AtomicU64::new(0) })
+        Ok(VrlIntegrator {
+            settings,
+            clamp: None,
+            gather_point_scale: 1.0,
+            tracer: PassTracer::new(paths),
+            evaluations: AtomicU64::new(0),
+        })
     }
 
     pub fn paths_per_pass(&self) -> u64 {
@@ -53,9 +72,11 @@ impl Integrator for VrlIntegrator {
     }
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> VrlPass {
-        let set = self.tracer.trace(scene, seed, pass, &self.settings.trace, |s| s.vrls.len());
+        let set = self
+            .tracer
+            .trace(scene, seed, pass, &self.settings.trace, |s| s.vrls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
-        VrlPass { groups, media: media(scene) }
+        VrlPass { groups, surface_vpls: surface_vpls(&set), media: media(scene) }
     }
 
     fn radiance(
@@ -66,15 +87,49 @@ impl Integrator for VrlIntegrator {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
-            let lights = &pass.groups[group];
-            self.evaluations.fetch_add(lights.len() as u64, Ordering::Relaxed);
-            sum_contributions(scene, &cs.seg, &pass.media[cs.medium as usize], lights, &pass.media, key)
-        })
+        whole_path_radiance(scene, ray, medium, sampler, &VrlGather { integrator: self, scene, pass })
     }
 
     fn summary(&self) -> Option<String> {
-        Some(format!("vrl: {}", self.tracer.summary("VRLs")))
+        Some(format!("vrl: {}", self.tracer.summary("VRLs and surface VPLs")))
+    }
+}
+
+/// The VRL integrator's side of the camera walk.
+struct VrlGather<'a> {
+    integrator: &'a VrlIntegrator,
+    scene: &'a Scene,
+    pass: &'a VrlPass,
+}
+
+impl Gather for VrlGather<'_> {
+    fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
+        let (scene, pass) = (self.scene, self.pass);
+        let cam_medium = &pass.media[cs.medium as usize];
+        let n = pass.groups[0].len() + pass.groups[1].len() + pass.surface_vpls.len();
+        self.integrator.evaluations.fetch_add(n as u64, Ordering::Relaxed);
+        let sums =
+            [0, 1].map(|g| sum_contributions(scene, &cs.seg, cam_medium, &pass.groups[g], &pass.media, key));
+        let surface =
+            surface_vpls_to_segment(scene, &pass.surface_vpls, cs, cam_medium, key, self.integrator.clamp);
+        [sums[0], sums[1] + surface]
+    }
+
+    fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
+        let (scene, pass) = (self.scene, self.pass);
+        let mut sum = Rgb::ZERO;
+        for (i, vrl) in pass.groups.iter().flatten().enumerate() {
+            sum += sample_vrl_to_point(
+                gp.p,
+                |d| gp.reflectance(d),
+                vrl,
+                &pass.media[vrl.medium as usize],
+                light_uniforms(key, i as u32).x,
+                |y, x| connect(scene, vrl.medium, y, x),
+            );
+        }
+        (sum + surface_vpls_to_point(scene, &pass.surface_vpls, gp, self.integrator.clamp))
+            * self.integrator.gather_point_scale
     }
 }
 

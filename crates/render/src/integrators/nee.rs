@@ -118,6 +118,53 @@ fn crossing_factor(bsdf: &Bsdf, d: Vec3, ns: Vec3, uv: Vec2) -> Rgb {
     }
 }
 
+/// How [`surface_nee`] weights a light sample against BSDF sampling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceMis {
+    /// The power heuristic against the BSDF's pdf (the integrator also counts emitters its BSDF
+    /// samples hit, as `volpath` does).
+    PowerHeuristic,
+    /// Weight 1: next-event estimation is the only strategy for direct light at this vertex
+    /// (the many-light integrators, `docs/theory.md` §2.1).
+    None,
+}
+
+/// Next-event estimation of direct light at the non-delta surface vertex `h` reached from the
+/// direction `wi` (local to `frame`, the shading frame at `h`) in `medium` (the medium the path
+/// arrived in): one emitter sample, `f(wi, wo) |cos wo| L_e Tr / p` with its MIS weight
+/// (`volpath`'s surface NEE). The caller multiplies by its path throughput.
+pub fn surface_nee(
+    scene: &Scene,
+    sampler: &mut haze_core::Sampler,
+    h: &haze_scene::SurfaceInteraction,
+    frame: &Frame,
+    wi: Vec3,
+    medium: Option<MediumId>,
+    mis: SurfaceMis,
+) -> Rgb {
+    let Some(es) = scene.sample_emitter_direction(h.p, sampler.next_1d(), sampler.next_2d()) else {
+        return Rgb::ZERO;
+    };
+    let shape = &scene.shapes[h.shape as usize];
+    let wo = frame.to_local(es.wi);
+    let f = shape.bsdf.eval(wi, wo, h.uv);
+    if f.is_black() {
+        return Rgb::ZERO;
+    }
+    let tr =
+        transmittance_to(scene, h.p, Some(h.n), es.wi, es.dist, shape.medium_towards(es.wi, h.n, medium));
+    if tr.is_black() {
+        return Rgb::ZERO;
+    }
+    let w = match mis {
+        SurfaceMis::PowerHeuristic if !es.is_delta => {
+            haze_core::sampling::power_heuristic(es.pdf, shape.bsdf.pdf(wi, wo, h.uv))
+        }
+        _ => 1.0,
+    };
+    f * es.radiance * tr * (w / es.pdf)
+}
+
 /// `exp(-tau)` per channel, with a single `exp` when the channels are equal (grey media).
 #[inline]
 fn exp_neg(tau: Rgb) -> Rgb {

@@ -16,7 +16,7 @@
 //! `volpath`'s single hero channel. Both are unbiased; MIS has far lower variance when channels
 //! differ. Every contribution is divided by `mean(r)`, the pdf ratios of the path so far.
 
-use super::nee::transmittance_to;
+use super::nee::{surface_nee, transmittance_to, SurfaceMis};
 use super::Integrator;
 use crate::components::{Component, PathRadiance};
 use haze_core::ray::offset_origin;
@@ -176,25 +176,8 @@ impl Integrator for VolPath {
             let medium_towards = |d: glam::Vec3| shape.medium_towards(d, h.n, medium);
 
             if !shape.bsdf.is_specular() && depth + 1 < max_depth {
-                if let Some(es) = scene.sample_emitter_direction(h.p, sampler.next_1d(), sampler.next_2d()) {
-                    let wo = frame.to_local(es.wi);
-                    let f = shape.bsdf.eval(wi, wo, h.uv);
-                    if !f.is_black() {
-                        let tr =
-                            transmittance_to(scene, h.p, Some(h.n), es.wi, es.dist, medium_towards(es.wi));
-                        if !tr.is_black() {
-                            let w = if es.is_delta {
-                                1.0
-                            } else {
-                                power_heuristic(es.pdf, shape.bsdf.pdf(wi, wo, h.uv))
-                            };
-                            out.add(
-                                Component::Surface,
-                                beta * f * es.radiance * tr * (w / (es.pdf * r.mean())),
-                            );
-                        }
-                    }
-                }
+                let direct = surface_nee(scene, sampler, &h, &frame, wi, medium, SurfaceMis::PowerHeuristic);
+                out.add(Component::Surface, beta * direct / r.mean());
             }
 
             let Some(bs) = shape.bsdf.sample(wi, sampler.next_1d(), sampler.next_2d(), h.uv) else { break };

@@ -3,12 +3,14 @@
 
 use super::Forest;
 use crate::camera::CameraSegment;
+use crate::gather::GatherPoint;
 use crate::integrators::{connect, light_uniforms};
 use crate::lighttrace::{LightSet, VplRecord, VrlRecord};
 use crate::tree::bound::{BoundContext, BoundKind};
 use crate::tree::cone::{node_cones, node_dir_cones};
 use crate::tree::lights::LightSummary;
-use crate::vpl::{sample_vpl_contribution, Vpl};
+use crate::vpl::{point_light_to_point, sample_vpl_contribution, Vpl};
+use crate::vrl::surface::sample_vrl_to_point;
 use crate::vrl::{sample_vrl_contribution, Vrl, VrlMedium};
 use haze_core::Rgb;
 use haze_scene::Scene;
@@ -18,7 +20,7 @@ pub trait ClusterKind: Sized + Send + Sync + 'static {
     type Light: Send + Sync;
     /// The integrator's name (`vrl_lightcuts`, ...).
     const NAME: &'static str;
-    /// This kind's lights of a pass, in the two groups of `many_light_radiance`
+    /// This kind's lights of a pass, in the two groups of `gather::Gather::segment`
     /// (medium-only, after a surface bounce).
     fn lights(set: &LightSet) -> [Vec<Self::Light>; 2];
     /// What the tree knows of one light.
@@ -36,6 +38,9 @@ pub trait ClusterKind: Sized + Send + Sync + 'static {
         key: u64,
         index: u32,
     ) -> Rgb;
+    /// One sampled contribution of `light` to the gathering surface point `gp` (unbiased;
+    /// `docs/theory.md` §5.1, §5.3).
+    fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], light: &Self::Light, u: f32) -> Rgb;
 }
 
 /// Virtual ray lights (`vrl_lightcuts`).
@@ -77,6 +82,16 @@ impl ClusterKind for Vrls {
             |y, x| connect(scene, vrl.medium, y, x),
         )
     }
+    fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
+        sample_vrl_to_point(
+            gp.p,
+            |d| gp.reflectance(d),
+            vrl,
+            &media[vrl.medium as usize],
+            u,
+            |y, x| connect(scene, vrl.medium, y, x),
+        )
+    }
 }
 
 /// Virtual point lights (`vpl_lightcuts`).
@@ -109,6 +124,17 @@ impl ClusterKind for Vpls {
             vpl,
             &media[vpl.medium as usize].phase,
             light_uniforms(key, index).x,
+            None,
+            |y, x| connect(scene, vpl.medium, y, x),
+        )
+    }
+    fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vpl: &Vpl, _u: f32) -> Rgb {
+        let phase = &media[vpl.medium as usize].phase;
+        point_light_to_point(
+            gp.p,
+            |d| gp.reflectance(d),
+            vpl.p,
+            |n| vpl.flux * phase.eval(vpl.d_in, n),
             None,
             |y, x| connect(scene, vpl.medium, y, x),
         )

@@ -6,14 +6,21 @@
 //! (`tree::cut`, `--cut bound`).
 //!
 //! Component split as in `vrl`/`vpl`: lights that follow a surface bounce live in a tree of
-//! their own, so `multiple` and `surface` stay separate.
+//! their own, so `multiple` and `surface` stay separate. The camera walk is `vrl`'s
+//! (`gather.rs`, the whole image); surface VPLs and gathering surface points are served by
+//! power sampling (`surface.rs`), not by the trees.
 
 mod kinds;
+mod surface;
 
 pub use kinds::{ClusterKind, Vpls, Vrls};
 
-use super::{many_light_radiance, media, paths_per_pass, ManyLightSettings};
+use super::{
+    connect_surface, light_uniforms, media, paths_per_pass, surface_vpls, ManyLightSettings,
+    SURFACE_VPL_STREAM,
+};
 use crate::camera::CameraSegment;
+use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::trace_light_paths;
 use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
@@ -25,6 +32,7 @@ use crate::tree::stochastic::{
     stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
 };
 use crate::tree::{LightTree, Node};
+use crate::vpl::{point_light_to_point, sample_point_light_to_segment, SurfaceVpl};
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
@@ -34,6 +42,7 @@ use std::cell::RefCell;
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
+use surface::{sampled_sum, surface_vpl_weight, PowerSampler};
 
 /// Which tree builder to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,6 +133,11 @@ pub struct LightcutPass<K: ClusterKind> {
     sigma_t_min: Rgb,
     /// The phase every medium shares, if one (for the tight bound's light-side phase).
     light_phase: Option<haze_core::Phase>,
+    surface_vpls: Vec<SurfaceVpl>,
+    /// Surface VPLs by flux, for camera segments.
+    surface_sampler: PowerSampler,
+    /// Every light (tree 0, tree 1, surface VPLs, in that order) by flux, for gathering points.
+    point_sampler: PowerSampler,
 }
 
 impl<K: ClusterKind> LightcutsIntegrator<K> {
@@ -234,8 +248,15 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let t1 = Instant::now();
         let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
         let [a, b] = K::lights(&set);
-        let n = a.len() + b.len();
+        let surface_vpls = surface_vpls(&set);
+        let n = a.len() + b.len() + surface_vpls.len();
         let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
+        let surface_sampler = PowerSampler::new(surface_vpls.iter().map(surface_vpl_weight));
+        // In the trees' light order (the builders may reorder the lights).
+        let tree_weights =
+            forests.iter().flat_map(|f| f.lights.iter().map(|l| K::summary(l, &media).intensity));
+        let point_sampler =
+            PowerSampler::new(tree_weights.chain(surface_vpls.iter().map(surface_vpl_weight)));
         self.stats.trace_ns.fetch_add((t1 - t0).as_nanos() as u64, Ordering::Relaxed);
         self.stats.build_ns.fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
         self.stats.lights.fetch_add(n as u64, Ordering::Relaxed);
@@ -255,7 +276,16 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
             })
         };
         let light_phase = media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p));
-        LightcutPass { light_factor: light_factor(&media), forests, media, sigma_t_min, light_phase }
+        LightcutPass {
+            light_factor: light_factor(&media),
+            forests,
+            media,
+            sigma_t_min,
+            light_phase,
+            surface_vpls,
+            surface_sampler,
+            point_sampler,
+        }
     }
 
     fn radiance(
@@ -266,62 +296,7 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        many_light_radiance(scene, ray, medium, sampler, |cs, key, group| {
-            let forest = &pass.forests[group];
-            if forest.tree.is_empty() {
-                return Rgb::ZERO;
-            }
-            let cam_medium = &pass.media[cs.medium as usize];
-            let (value, stats) = match self.settings.strategy {
-                CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
-                    let ctx = ImportanceContext::new(cs.seg, cam_medium, pass.sigma_t_min);
-                    let importance = |n: &SampleNode| ctx.importance(n);
-                    let mut sum = Rgb::ZERO;
-                    let descent_key = key ^ (0xa5a5_5a5a_0f0f_f0f0 * (group as u64 + 1));
-                    let size = stochastic_cut(
-                        &forest.sample,
-                        &importance,
-                        &self.settings.stochastic,
-                        descent_key,
-                        scratch,
-                        |light, prob| {
-                            let l = &forest.lights[light as usize];
-                            sum += K::contribution(scene, cs, &pass.media, l, key, light) * (1.0 / prob);
-                        },
-                    );
-                    if PROBING.get() {
-                        let (mut total, mut largest) = (0.0f64, 0.0f64);
-                        for &n in scratch.cut() {
-                            let i = importance(forest.sample.node(n)) as f64;
-                            total += i;
-                            largest = largest.max(i);
-                        }
-                        let share = if total > 0.0 { largest / total } else { 1.0 };
-                        CUT_TALLY.with(|t| {
-                            let (v, n) = t.get();
-                            t.set((v + share, n + 1));
-                        });
-                    }
-                    (sum, CutStats { size, hit_max: false })
-                }),
-                CutStrategy::Bound => CUT_SCRATCH.with_borrow_mut(|scratch| {
-                    let bound = BoundContext {
-                        seg: cs.seg,
-                        camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
-                        light_factor: pass.light_factor,
-                        sigma_t_min: pass.sigma_t_min,
-                        kind: self.settings.bound,
-                        theta: self.settings.theta,
-                        camera_phase: cam_medium.phase,
-                        light_phase: pass.light_phase,
-                    };
-                    let mut o = Oracle { scene, forest, cs, media: &pass.media, bound, key };
-                    lightcut(&forest.tree, &mut o, &self.settings.cut, scratch)
-                }),
-            };
-            self.record(&stats);
-            value
-        })
+        whole_path_radiance(scene, ray, medium, sampler, &LightcutGather { integrator: self, scene, pass })
     }
 
     fn summary(&self) -> Option<String> {
@@ -406,5 +381,141 @@ impl<K: ClusterKind> Integrator for CutSizeProbe<'_, K> {
             r.add(haze_render::Component::Emitted, Rgb::splat(size as f32 / n as f32));
         }
         r
+    }
+}
+
+impl<K: ClusterKind> LightcutsIntegrator<K> {
+    /// The cut of tree `group` for the camera segment `cs` (`gather::Gather::segment`'s per-group
+    /// sum, estimated through the tree).
+    fn segment_cut(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass<K>,
+        cs: &CameraSegment,
+        key: u64,
+        group: usize,
+    ) -> Rgb {
+        let forest = &pass.forests[group];
+        if forest.tree.is_empty() {
+            return Rgb::ZERO;
+        }
+        let cam_medium = &pass.media[cs.medium as usize];
+        let (value, stats) = match self.settings.strategy {
+            CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
+                let ctx = ImportanceContext::new(cs.seg, cam_medium, pass.sigma_t_min);
+                let importance = |n: &SampleNode| ctx.importance(n);
+                let mut sum = Rgb::ZERO;
+                let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
+                let size = stochastic_cut(
+                    &forest.sample,
+                    &importance,
+                    &self.settings.stochastic,
+                    descent_key,
+                    scratch,
+                    |light, prob| {
+                        let l = &forest.lights[light as usize];
+                        sum += K::contribution(scene, cs, &pass.media, l, key, light) * (1.0 / prob);
+                    },
+                );
+                if PROBING.get() {
+                    let (mut total, mut largest) = (0.0f64, 0.0f64);
+                    for &n in scratch.cut() {
+                        let i = importance(forest.sample.node(n)) as f64;
+                        total += i;
+                        largest = largest.max(i);
+                    }
+                    let share = if total > 0.0 { largest / total } else { 1.0 };
+                    CUT_TALLY.with(|t| {
+                        let (v, n) = t.get();
+                        t.set((v + share, n + 1));
+                    });
+                }
+                (sum, CutStats { size, hit_max: false })
+            }),
+            CutStrategy::Bound => CUT_SCRATCH.with_borrow_mut(|scratch| {
+                let bound = BoundContext {
+                    seg: cs.seg,
+                    camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
+                    light_factor: pass.light_factor,
+                    sigma_t_min: pass.sigma_t_min,
+                    kind: self.settings.bound,
+                    theta: self.settings.theta,
+                    camera_phase: cam_medium.phase,
+                    light_phase: pass.light_phase,
+                };
+                let mut o = Oracle { scene, forest, cs, media: &pass.media, bound, key };
+                lightcut(&forest.tree, &mut o, &self.settings.cut, scratch)
+            }),
+        };
+        self.record(&stats);
+        value
+    }
+}
+
+/// The lightcut integrator's side of the camera walk (`gather.rs`).
+struct LightcutGather<'a, K: ClusterKind> {
+    integrator: &'a LightcutsIntegrator<K>,
+    scene: &'a Scene,
+    pass: &'a LightcutPass<K>,
+}
+
+/// Separates the power-sampling numbers from the lights' own (`light_uniforms`).
+const POWER_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;
+
+impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
+    fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
+        let (scene, pass) = (self.scene, self.pass);
+        let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g));
+        let k = self.integrator.settings.stochastic.cut_size.max(1) as usize;
+        let cam_medium = &pass.media[cs.medium as usize];
+        let surface = sampled_sum(
+            &pass.surface_sampler,
+            k,
+            |j| light_uniforms(key ^ POWER_STREAM, j as u32).x,
+            |i| {
+                let vpl = &pass.surface_vpls[i];
+                let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+                sample_point_light_to_segment(
+                    &cs.seg,
+                    cam_medium,
+                    vpl.p,
+                    |w| vpl.intensity(bsdf, w),
+                    light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
+                    None,
+                    |_, x| connect_surface(scene, vpl, x),
+                )
+            },
+        );
+        [cuts[0], cuts[1] + surface]
+    }
+
+    fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
+        let (scene, pass) = (self.scene, self.pass);
+        let k = self.integrator.settings.stochastic.cut_size.max(1) as usize;
+        let (n0, n1) = (pass.forests[0].lights.len(), pass.forests[1].lights.len());
+        sampled_sum(
+            &pass.point_sampler,
+            k,
+            |j| light_uniforms(key ^ POWER_STREAM, j as u32).x,
+            |i| {
+                let u = light_uniforms(key, i as u32).x;
+                if i < n0 {
+                    K::to_point(scene, gp, &pass.media, &pass.forests[0].lights[i], u)
+                } else if i < n0 + n1 {
+                    K::to_point(scene, gp, &pass.media, &pass.forests[1].lights[i - n0], u)
+                } else {
+                    let vpl = &pass.surface_vpls[i - n0 - n1];
+                    let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+                    point_light_to_point(
+                        gp.p,
+                        |d| gp.reflectance(d),
+                        vpl.p,
+                        |w| vpl.intensity(bsdf, w),
+                        None,
+                        |_, x| connect_surface(scene, vpl, x),
+                    )
+                }
+            },
+        )
     }
 }
