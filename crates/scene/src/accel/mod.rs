@@ -21,17 +21,19 @@
 //! the scene is built ([`MAX_COORDINATE`]).
 
 mod watertight;
+mod wide;
 
-pub use watertight::{TriSoa, WatertightRay};
+pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
+use wide::{WideBvh, WideRay};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
 use crate::shape::{Geometry, Shape};
-use glam::{Mat4, Vec2, Vec3, Vec3A};
+use glam::{Mat4, UVec2, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
-use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::ray::Ray as BvhRay;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
@@ -125,9 +127,22 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
     }
 }
 
+/// A BVH leaf: its triangles transposed for [`WatertightRay::intersect_packet`], and the index
+/// (in leaf order, into `Accel::tris`) of the first.
+#[derive(Clone, Copy, Debug)]
+struct Leaf {
+    packet: TriPacket,
+    first: u32,
+}
+
 pub struct Accel {
-    bvh: Option<CwBvh>,
+    /// The tree as obvhs built it, and its nodes decoded ([`wide`]), which traversal reads.
+    bvh: Option<(CwBvh, WideBvh)>,
     tris: Vec<TriRef>,
+    /// Every BVH leaf's triangles as one packet (obvhs puts at most 3 in a leaf).
+    leaves: Vec<Leaf>,
+    /// For each triangle in leaf order, the index in `leaves` of its leaf.
+    leaf_of: Vec<u32>,
     analytic: Vec<Analytic>,
     lo: Vec3,
     hi: Vec3,
@@ -142,6 +157,29 @@ fn build_params(triangles: usize) -> BvhBuildParams {
         if triangles <= 1_000_000 { BvhBuildParams::slow_build() } else { BvhBuildParams::medium_build() };
     p.pre_split = false;
     p
+}
+
+/// One [`Leaf`] per leaf child of every node of `bvh` (primitive indices in leaf order, as in
+/// `tris`), and for each triangle the index of its leaf. A leaf child's metadata byte holds its
+/// first primitive's offset from the node's `primitive_base_idx` in the low 5 bits and its
+/// primitive count in unary in the high 3 (obvhs `CwBvhNode::child_meta`).
+fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>) {
+    let mut leaves = Vec::new();
+    let mut leaf_of = vec![u32::MAX; tris.len()];
+    for node in &bvh.nodes {
+        for (c, &meta) in node.child_meta.iter().enumerate() {
+            if node.imask & (1 << c) != 0 || meta == 0 {
+                continue;
+            }
+            let first = (node.primitive_base_idx + u32::from(meta & 0b11111)) as usize;
+            let count = (meta >> 5).count_ones() as usize;
+            let soa: Vec<TriSoa> = tris[first..first + count].iter().map(|t| t.v).collect();
+            leaf_of[first..first + count].fill(leaves.len() as u32);
+            leaves.push(Leaf { packet: TriPacket::new(&soa), first: first as u32 });
+        }
+    }
+    debug_assert!(leaf_of.iter().all(|&l| l != u32::MAX), "a triangle in no leaf");
+    (leaves, leaf_of)
 }
 
 impl Accel {
@@ -196,8 +234,8 @@ impl Accel {
                 }
             }
         }
-        let (bvh, tris) = if flat.is_empty() {
-            (None, Vec::new())
+        let (bvh, tris, leaves, leaf_of) = if flat.is_empty() {
+            (None, Vec::new(), Vec::new(), Vec::new())
         } else {
             let magnitude = flat
                 .iter()
@@ -212,10 +250,40 @@ impl Accel {
                 })
                 .collect();
             let bvh = build_cwbvh(&boxes, build_params(flat.len()), &mut Default::default());
-            let tris = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
-            (Some(bvh), tris)
+            let tris: Vec<TriRef> = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
+            let (leaves, leaf_of) = leaf_packets(&bvh, &tris);
+            let wide = WideBvh::new(&bvh);
+            (Some((bvh, wide)), tris, leaves, leaf_of)
         };
-        Accel { bvh, tris, analytic, lo, hi }
+        Accel { bvh, tris, leaves, leaf_of, analytic, lo, hi }
+    }
+
+    /// obvhs's `traverse!` loop over the decoded nodes for the traversal ray `r` (the backed-off
+    /// origin, see the module documentation). `test(leaf, t_max)` tests the triangles of a leaf
+    /// the ray reaches and returns the new `t_max` in the traversal's parametrisation (below the
+    /// old one for a closer hit: nodes beyond it are pruned), or `None` to end the traversal.
+    #[inline(always)]
+    fn traverse(&self, bvh: &(CwBvh, WideBvh), r: &BvhRay, mut test: impl FnMut(&Leaf, f32) -> Option<f32>) {
+        let (cw, wide) = bvh;
+        let ray = WideRay::new(r.origin, r.direction, r.inv_direction, 0.0);
+        let mut t_max = r.tmax;
+        let mut state = cw.new_traversal(r.direction);
+        let mut node;
+        'outer: {
+            obvhs::traverse!(wide, node, state, node.intersect(&ray, t_max, state.oct_inv4), {
+                // A hit leaf child sets its whole run of primitive bits and obvhs hands out the
+                // highest bit first, so this is the last triangle of its leaf: test the leaf
+                // and clear the rest of its run.
+                let leaf = &self.leaves[self.leaf_of[state.primitive_id as usize] as usize];
+                let run = state.primitive_id - leaf.first;
+                let local = state.primitive_id - state.primitive_group.x;
+                state.primitive_group.y &= !(((1u32 << run) - 1) << (local - run));
+                match test(leaf, t_max) {
+                    Some(t) => t_max = t,
+                    None => break 'outer,
+                }
+            });
+        }
     }
 
     pub fn bounds(&self) -> (Vec3, Vec3) {
@@ -235,17 +303,18 @@ impl Accel {
             // the shifted distances, for pruning.
             let mut closest: Option<(usize, f32, f32, f32)> = None;
             let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(t_max));
-            let mut hit = RayHit::none();
-            bvh.ray_traverse(r, &mut hit, |_, i| {
+            self.traverse(bvh, &r, |leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                match wt.intersect_soa(&self.tris[i].v, T_MIN, t_max) {
-                    Some((t, b1, b2)) => {
+                let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
+                Some(match hits.closest() {
+                    Some(lane) => {
+                        let t = hits.t[lane];
                         t_max = t;
-                        closest = Some((i, t, b1, b2));
+                        closest = Some((leaf.first as usize + lane, t, hits.b1[lane], hits.b2[lane]));
                         shifted(t)
                     }
-                    None => f32::INFINITY,
-                }
+                    None => shifted_max,
+                })
             });
             if let Some((i, t, b1, b2)) = closest {
                 best = Some(self.triangle_interaction(shapes, &self.tris[i], t, b1, b2));
@@ -332,14 +401,13 @@ impl Accel {
             let mut wt: Option<WatertightRay> = None;
             let mut blocked = false;
             let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
-            bvh.ray_traverse_miss(r, |_, i| {
+            self.traverse(bvh, &r, |leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                if wt.intersect_soa(&self.tris[i].v, T_MIN, ray.t_max).is_some() {
+                if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
                     blocked = true;
-                    // Below any tmax: obvhs stops at the first hit.
-                    f32::NEG_INFINITY
+                    None
                 } else {
-                    f32::INFINITY
+                    Some(shifted_max)
                 }
             });
             if blocked {
@@ -387,19 +455,25 @@ impl Accel {
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
         let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
-        bvh.ray_traverse_miss(r, |_, i| {
+        self.traverse(bvh, &r, |leaf, shifted_max| {
             let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-            let tri = &self.tris[i];
-            let Some((t, b1, b2)) = wt.intersect_soa(&tri.v, T_MIN, ray.t_max) else { return f32::INFINITY };
-            if tri.blocks || n == MAX_SHADOW_HITS {
-                overflow = !tri.blocks;
-                blocked = true;
-                // Below any tmax: obvhs stops at the first hit.
-                return f32::NEG_INFINITY;
+            let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
+            let mut m = found.mask;
+            while m != 0 {
+                let lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let i = leaf.first as usize + lane;
+                let tri = &self.tris[i];
+                if tri.blocks || n == MAX_SHADOW_HITS {
+                    overflow = !tri.blocks;
+                    blocked = true;
+                    return None;
+                }
+                hits[n] =
+                    ShadowHit { t: found.t[lane], tri: i as u32, b1: found.b1[lane], b2: found.b2[lane] };
+                n += 1;
             }
-            hits[n] = ShadowHit { t, tri: i as u32, b1, b2 };
-            n += 1;
-            f32::INFINITY
+            Some(shifted_max)
         });
         match (blocked, overflow) {
             (false, _) => ShadowQuery::Clear(n),
