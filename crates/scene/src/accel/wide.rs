@@ -29,7 +29,9 @@ pub struct WideNode {
     pub primitive_base_idx: u32,
     /// Read by obvhs's `traverse!` macro: which children are inner nodes.
     pub imask: u8,
-    child_meta: [u8; 8],
+    /// Each leaf child's bits of the hit mask (its primitives' run in the low 24 bits, the same
+    /// for every ray octant); 0 for inner children and empty slots.
+    leaf_bits: [u32; 8],
     /// Index (into the caller's leaf array) of this node's first leaf child, in primitive order.
     pub leaf_base: u32,
     /// Bit `i` set when a leaf child's primitives start at `primitive_base_idx + i`, so the
@@ -75,7 +77,16 @@ impl WideNode {
             child_base_idx: n.child_base_idx,
             primitive_base_idx: n.primitive_base_idx,
             imask: n.imask,
-            child_meta: n.child_meta,
+            leaf_bits: std::array::from_fn(|c| {
+                let meta = u32::from(n.child_meta[c]);
+                if n.imask & (1 << c) != 0 {
+                    // The octant trick of `intersect` relies on obvhs's encoding of inner children.
+                    assert_eq!(meta, 0b0010_0000 | (24 + c as u32), "obvhs changed its node encoding");
+                    0
+                } else {
+                    (meta >> 5) << (meta & 0b11111)
+                }
+            }),
             leaf_base,
             leaf_starts: leaf_children(n).fold(0, |m, (offset, _)| m | 1 << offset),
         }
@@ -106,28 +117,32 @@ impl WideNode {
             }
             lo.cmple(hi)
         };
-        let mut mask = half(0).bitmask() | half(1).bitmask() << 4;
+        let mask = half(0).bitmask() | half(1).bitmask() << 4;
         if mask == 0 {
             return 0;
         }
-        let (child_bits8, bit_index8) = self.child_and_index_bits(oct_inv4);
-        let mut hit_mask = 0u32;
-        while mask != 0 {
-            let c = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            let child_bits = ((child_bits8 >> (8 * c)) & 0xff) as u32;
-            let bit_index = ((bit_index8 >> (8 * c)) & 0xff) as u32;
-            hit_mask |= child_bits << bit_index;
+        // obvhs (`get_child_and_index_bits`) puts inner child `c`, stored with metadata
+        // `24 + c`, at bit `24 + (c ^ o)` for the ray octant `o`: permute the inner children's
+        // bits by that XOR, one swap per set bit of `o`.
+        let o = oct_inv4 & 7;
+        let mut inner = mask & u32::from(self.imask);
+        if o & 1 != 0 {
+            inner = ((inner & 0x55) << 1) | ((inner >> 1) & 0x55);
         }
-        hit_mask
+        if o & 2 != 0 {
+            inner = ((inner & 0x33) << 2) | ((inner >> 2) & 0x33);
+        }
+        if o & 4 != 0 {
+            inner = ((inner & 0x0f) << 4) | ((inner >> 4) & 0x0f);
+        }
+        // Leaf children: their runs, without branches (which child a ray hits is unpredictable).
+        let mut leaves = 0u32;
+        for (c, bits) in self.leaf_bits.iter().enumerate() {
+            leaves |= bits & 0u32.wrapping_sub((mask >> c) & 1);
+        }
+        inner << 24 | leaves
     }
 
-    /// obvhs's `CwBvhNode::get_child_and_index_bits` over this node's metadata.
-    #[inline(always)]
-    fn child_and_index_bits(&self, oct_inv4: u32) -> (u64, u64) {
-        let meta = CwBvhNode { child_meta: self.child_meta, ..Default::default() };
-        meta.get_child_and_index_bits(oct_inv4)
-    }
 }
 
 /// The leaf children of `n` as `(offset, count)`: their first primitive's offset from
