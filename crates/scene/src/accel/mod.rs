@@ -3,19 +3,27 @@
 //! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
 //! have few of them).
 //!
+//! obvhs builds the tree; traversal is obvhs's `traverse!` loop (its stack, child order and
+//! leaf encoding) with two parts of ours, which made the BVH queries of the Mitsuba peer scenes
+//! ~20-30% cheaper (docs/performance.md, "Traversal of the peer scenes"): the node test reads
+//! child boxes decoded to f32 once ([`wide`]), and each leaf's 1-3 triangles are tested at once
+//! in SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
+//!
 //! A watertight triangle test is not enough for a watertight traversal (issue 16, "the leak":
 //! paths escaped closed cube rooms). Two things in the BVH lost hits, and both are handled here
 //! rather than in obvhs:
-//! - obvhs's ray-box test is not conservative: its slab distances carry rounding error, and a
+//! - A ray-box test is not conservative: its slab distances carry rounding error, and a
 //!   face of an axis-aligned mesh has a flat box (zero thickness), so a ray through an edge
 //!   shared by two flat boxes could miss both. Every triangle's box is therefore padded by
 //!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
-//!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions).
+//!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions). The
+//!   decoded boxes are obvhs's quantised ones, which enclose these padded boxes.
 //! - obvhs clamps the entry distance of every box to `1e-4` (`cwbvh::node::EPSILON`; the ray's
 //!   `tmin` is not used), so a box the ray leaves before `t = 1e-4` is skipped: a wall just in
 //!   front of a point in a medium, or the adjacent wall at a corner. The traversal ray therefore
 //!   starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from the real
-//!   origin) report their distances in that shifted parametrisation.
+//!   origin) report their distances in that shifted parametrisation. (Our node test starts
+//!   boxes at `t = 0` of that ray, so it is doubly covered.)
 //!
 //! Coordinates whose magnitude obvhs's quantised node boxes cannot represent are refused when
 //! the scene is built ([`MAX_COORDINATE`]).
@@ -32,7 +40,7 @@ use crate::shape::{Geometry, Shape};
 use glam::{Mat4, UVec2, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
+use obvhs::cwbvh::{builder::build_cwbvh, CwBvh, Traversal};
 use obvhs::ray::Ray as BvhRay;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
@@ -145,8 +153,8 @@ struct Leaf {
 }
 
 pub struct Accel {
-    /// The tree as obvhs built it, and its nodes decoded ([`wide`]), which traversal reads.
-    bvh: Option<(CwBvh, WideBvh)>,
+    /// The tree obvhs built, its nodes decoded ([`wide`]): what traversal reads.
+    bvh: Option<WideBvh>,
     /// Shape and primitive of each triangle in leaf order (the vertices are in `leaves`).
     tris: Vec<TriId>,
     /// Every BVH leaf's triangles as one packet (obvhs puts at most 3 in a leaf).
@@ -265,7 +273,7 @@ impl Accel {
             let (leaves, leaf_base, leaf_of) = leaf_packets(&bvh, &tris);
             let wide = WideBvh::new(&bvh, &leaf_base);
             let tris = tris.iter().map(|t| TriId { shape: t.shape, prim: t.prim }).collect();
-            (Some((bvh, wide)), tris, leaves, leaf_of)
+            (Some(wide), tris, leaves, leaf_of)
         };
         Accel { bvh, tris, leaves, leaf_of, analytic, lo, hi }
     }
@@ -275,11 +283,12 @@ impl Accel {
     /// the ray reaches and returns the new `t_max` in the traversal's parametrisation (below the
     /// old one for a closer hit: nodes beyond it are pruned), or `None` to end the traversal.
     #[inline(always)]
-    fn traverse(&self, bvh: &(CwBvh, WideBvh), r: &BvhRay, mut test: impl FnMut(&Leaf, f32) -> Option<f32>) {
-        let (cw, wide) = bvh;
+    fn traverse(&self, wide: &WideBvh, r: &BvhRay, mut test: impl FnMut(&Leaf, f32) -> Option<f32>) {
         let ray = WideRay::new(r.origin, r.direction, r.inv_direction, 0.0);
         let mut t_max = r.tmax;
-        let mut state = cw.new_traversal(r.direction);
+        // `CwBvh::new_traversal` for a tree with nodes (`WideBvh` always has a root).
+        let mut state = Traversal::default();
+        state.reinit(r.direction);
         let mut node = &wide.nodes[0];
         'outer: {
             obvhs::traverse!(wide, node, state, node.intersect(&ray, t_max, state.oct_inv4), {
@@ -322,7 +331,8 @@ impl Accel {
                     Some(lane) => {
                         let t = hits.t[lane];
                         t_max = t;
-                        closest = Some((leaf.first as usize + lane, t, hits.b1[lane], hits.b2[lane]));
+                        let (b1, b2) = hits.barycentrics(lane);
+                        closest = Some((leaf.first as usize + lane, t, b1, b2));
                         shifted(t)
                     }
                     None => shifted_max,
@@ -487,8 +497,8 @@ impl Accel {
                     blocked = true;
                     return None;
                 }
-                hits[n] =
-                    ShadowHit { t: found.t[lane], tri: i as u32, b1: found.b1[lane], b2: found.b2[lane] };
+                let (b1, b2) = found.barycentrics(lane);
+                hits[n] = ShadowHit { t: found.t[lane], tri: i as u32, b1, b2 };
                 n += 1;
             }
             Some(shifted_max)

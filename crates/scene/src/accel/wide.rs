@@ -135,14 +135,16 @@ impl WideNode {
         if o & 4 != 0 {
             inner = ((inner & 0x0f) << 4) | ((inner >> 4) & 0x0f);
         }
-        // Leaf children: their runs, without branches (which child a ray hits is unpredictable).
+        // Leaf children: their runs. (A branch-free loop over all 8 slots measured no faster on
+        // the peer scenes and slower on small ones, where few children are hit.)
         let mut leaves = 0u32;
-        for (c, bits) in self.leaf_bits.iter().enumerate() {
-            leaves |= bits & 0u32.wrapping_sub((mask >> c) & 1);
+        let mut hit_leaves = mask & !u32::from(self.imask);
+        while hit_leaves != 0 {
+            leaves |= self.leaf_bits[hit_leaves.trailing_zeros() as usize];
+            hit_leaves &= hit_leaves - 1;
         }
         inner << 24 | leaves
     }
-
 }
 
 /// The leaf children of `n` as `(offset, count)`: their first primitive's offset from
