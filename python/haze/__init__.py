@@ -185,10 +185,18 @@ class Scene:
         sample budget."""
         return self._inner.cut_sizes(integrator, **_given(locals()))
 
-    def spp_per_pass_for(self, integrator: str | None = "vrl_lightcuts", spp_per_pass: int | None = None) -> int:
-        """The samples per pixel of each pass of a render of this scene with ``integrator``:
-        ``spp_per_pass`` when given, else the engine's auto default for the method and the
-        image size (as ``haze render`` prints it; see ``spp_per_pass`` in :data:`OPTIONS`)."""
+    def spp_per_pass_for(
+        self,
+        integrator: str | None = "vrl_lightcuts",
+        *,
+        spp: int | None = None,
+        time: float | None = None,
+        spp_per_pass: int | None = None,
+    ) -> int:
+        """The samples per pixel of each pass of a render of this scene with ``integrator`` and
+        the budget ``spp`` (default: the scene's) or ``time``: ``spp_per_pass`` when given,
+        else the engine's auto default for the method, the image size and the budget (as
+        ``haze render`` prints it; see ``spp_per_pass`` in :data:`OPTIONS`)."""
         return self._inner.spp_per_pass(integrator, **_given(locals()))
 
     def __repr__(self) -> str:

@@ -161,10 +161,11 @@ def render(
 
     The budget is ``spp`` samples per pixel (default: the scene's ``sample_count``), that is
     ``spp / spp_per_pass`` passes (``spp`` must be a multiple of ``spp_per_pass``; by default
-    the engine's auto value for the method and image size, ``Scene.spp_per_pass_for``), or
-    ``time`` seconds. With ``spp`` the result equals, bit for bit, ``haze.load_scene(scene_path,
-    **defaults).render_passes(integrator, first_pass, spp // spp_per_pass, ...)``, whatever the
-    cluster size. With ``time`` the driver hands out blocks of passes in order (``first_pass``,
+    the engine's auto value for the method, image size and budget,
+    ``Scene.spp_per_pass_for(integrator, spp=spp)``), or ``time`` seconds. With ``spp`` the
+    result equals, bit for bit, ``haze.load_scene(scene_path, **defaults).render_passes(integrator,
+    first_pass, spp // spp_per_pass, spp_per_pass=spp_per_pass, ...)``, whatever the cluster
+    size. With ``time`` the driver hands out blocks of passes in order (``first_pass``,
     then the next block, ...) to keep every worker busy while time remains, and stops handing
     them out at the deadline; the blocks already handed out are finished (so the render may
     overrun by about one block's time), and the result is the film of the ``N`` passes

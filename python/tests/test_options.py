@@ -160,11 +160,14 @@ def test_spp_per_pass_is_the_command_lines(tmp_path):
     lights = ["--light-paths", "10"]
     for method in haze.METHOD_NAMES:
         many_light = method != "volpath"
-        args = [haze_binary(), "render", path, "--integrator", method, "--spp", "1", "-q", "-o", tmp_path / "x.exr"]
+        args = [haze_binary(), "render", path, "--integrator", method, "--spp", "16", "-q", "-o", tmp_path / "x.exr"]
         err = subprocess.run(args + (lights if many_light else []), capture_output=True, text=True, check=True).stderr
         printed = re.search(rf"^{method}: spp per pass (\d+) \(auto", err, re.M)
         assert printed, err
-        assert int(printed.group(1)) == scene.spp_per_pass_for(method) == (16 if "lightcuts" in method else 1)
+        want = 16 if "lightcuts" in method else 1
+        assert int(printed.group(1)) == scene.spp_per_pass_for(method, spp=16) == want
+        # render_passes: the scene's budget (64 spp, a multiple of 16).
         film = scene.render_passes(method, 0, 1, light_paths=10 if many_light else None)
-        assert film.samples == int(printed.group(1))
-        assert scene.spp_per_pass_for(method, spp_per_pass=3) == 3
+        assert film.samples == scene.spp_per_pass_for(method) == want
+        assert scene.spp_per_pass_for(method, spp=16, spp_per_pass=3) == 3
+        assert scene.spp_per_pass_for(method, spp=6) == (2 if "lightcuts" in method else 1)

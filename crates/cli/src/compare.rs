@@ -230,6 +230,7 @@ pub fn run_method(
 fn spp_per_pass(
     spec: &MethodSpec,
     every: Option<u32>,
+    time: f64,
     scene: &haze_scene::Scene,
 ) -> Result<(u32, &'static str)> {
     let (given, how) = match (every, spec.spp_per_pass) {
@@ -240,7 +241,8 @@ fn spp_per_pass(
         (None, Some(n)) => (Some(n), "given"),
         (None, None) => (None, "auto"),
     };
-    let options = options::Options { spp_per_pass: given, ..options::Options::defaults() };
+    // Compare's budget is time, not a sample count.
+    let options = options::Options { spp_per_pass: given, time: Some(time), ..options::Options::defaults() };
     Ok((options.spp_per_pass_for(spec.kind, scene), how))
 }
 
@@ -321,7 +323,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     };
     let mut results = Vec::new();
     for spec in &args.methods {
-        let (spp_per_pass, how) = spp_per_pass(spec, every, &scene)?;
+        let (spp_per_pass, how) = spp_per_pass(spec, every, args.time, &scene)?;
         eprintln!("{spec}: rendering for {:.1} s, spp per pass {spp_per_pass} ({how})", args.time);
         let r = run_method(&scene, spec, &reference.data, budget, args.seed, spp_per_pass)
             .with_context(|| format!("{}: method {spec}", args.scene.display()))?;
@@ -527,7 +529,7 @@ mod tests {
             <integer name="width" value="128"/><integer name="height" value="128"/></film></sensor></scene>"#;
         let path = std::path::Path::new("t.xml");
         let scene = haze_scene::load_str(xml, path, std::path::Path::new("."), &Default::default()).unwrap();
-        let of = |s: &str, every| spp_per_pass(&spec(s), every, &scene).map_err(|e| e.to_string());
+        let of = |s: &str, every| spp_per_pass(&spec(s), every, 1.0, &scene).map_err(|e| e.to_string());
         assert_eq!(of("vrl_lightcuts:1000", None), Ok((16, "auto")));
         assert_eq!(of("vpl_lightcuts", None), Ok((16, "auto")));
         for s in ["vrl:1000", "vpl", "volpath"] {

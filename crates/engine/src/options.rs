@@ -390,7 +390,8 @@ pub const OPTIONS: &[OptionSpec] = &[
             "auto: for vrl_lightcuts and vpl_lightcuts about 262144 camera samples per pass, \
              clamp(round(262144 / (width * height)), 1, 64): 16 at 128x128, where 16 beat 4 \
              and 1 at equal time (docs/lightcuts.md \"Choosing the defaults\"), and 1 at \
-             640x360 and above; 1 for the other methods (brute-force vrl and vpl cost per \
+             640x360 and above; with an spp budget the largest divisor of spp up to that, so \
+             passes are equal; 1 for the other methods (brute-force vrl and vpl cost per \
              sample grows with the light count, volpath batches passes)",
         ),
         help: "Samples per pixel in each progressive pass; the many-light methods trace one light \
@@ -657,11 +658,20 @@ impl Options {
         o
     }
 
-    /// The spp per pass of a render of `scene` with `method`: the given value, else auto
-    /// ([`auto_spp_per_pass`] for the camera's image size). Every front end asks this.
+    /// The spp per pass of a render of `scene` with `method`: the given value, else auto:
+    /// [`auto_spp_per_pass`] for the camera's image size, and with a sample budget (`spp`, default
+    /// the scene's; not with `time`) the largest divisor of it not above that, so that the
+    /// budget is whole passes of equal size (what a distributed render, `spp / spp_per_pass`
+    /// passes, needs; 2 spp at 128x128 are one pass of 2). Every front end asks this.
     pub fn spp_per_pass_for(&self, method: MethodKind, scene: &Scene) -> u32 {
-        self.spp_per_pass
-            .unwrap_or_else(|| auto_spp_per_pass(method, scene.camera.width, scene.camera.height))
+        if let Some(n) = self.spp_per_pass {
+            return n;
+        }
+        let auto = auto_spp_per_pass(method, scene.camera.width, scene.camera.height);
+        match (self.time, self.spp.unwrap_or(scene.spp)) {
+            (None, spp) if spp > 0 => (1..=auto).rev().find(|d| spp % d == 0).unwrap_or(1),
+            _ => auto,
+        }
     }
 
     /// The progressive render's settings for `method`: `spp` samples (default: the scene's) or
@@ -947,8 +957,10 @@ mod tests {
     #[test]
     fn spp_per_pass_is_auto_per_method_and_image_size() {
         let (small, wide) = (scene(128, 128), scene(640, 360));
-        let auto = Options::defaults();
+        let auto = ok(Vrl, &[("spp", "1024")]);
+        let timed = ok(Vrl, &[("time", "1")]);
         for m in MethodKind::ALL {
+            assert_eq!(timed.spp_per_pass_for(m, &small), if m.is_lightcuts() { 16 } else { 1 });
             let want = if m.is_lightcuts() { 16 } else { 1 };
             assert_eq!(auto.spp_per_pass_for(m, &small), want, "{m} at 128x128");
             assert_eq!(auto.spp_per_pass_for(m, &wide), 1, "{m} at 640x360");
@@ -958,6 +970,12 @@ mod tests {
             assert_eq!((given.spp_per_pass_for(m, &small), given.spp_per_pass_for(m, &wide)), (3, 3));
             assert_eq!(given.render_settings(m, &small).spp_per_pass, 3);
         }
+        // A sample budget is whole passes: the largest divisor of spp up to the rule's value
+        // (the scene's spp, Mitsuba's default 4, without a given one).
+        for (spp, want) in [("100", 10), ("2", 2), ("17", 1), ("48", 16)] {
+            assert_eq!(ok(Vrl, &[("spp", spp)]).spp_per_pass_for(VrlLightcuts, &small), want, "{spp}");
+        }
+        assert_eq!(Options::defaults().spp_per_pass_for(VplLightcuts, &small), small.spp.min(16));
         // Rounded, then clamped to 1 ..= 64.
         assert_eq!(auto_spp_per_pass(VplLightcuts, 256, 128), 8);
         assert_eq!(auto_spp_per_pass(VrlLightcuts, 100, 100), 26);
