@@ -170,4 +170,4 @@ def test_spp_per_pass_is_the_command_lines(tmp_path):
         film = scene.render_passes(method, 0, 1, light_paths=10 if many_light else None)
         assert film.samples == scene.spp_per_pass_for(method) == want
         assert scene.spp_per_pass_for(method, spp=16, spp_per_pass=3) == 3
-        assert scene.spp_per_pass_for(method, spp=6) == (2 if "lightcuts" in method else 1)
+        assert scene.spp_per_pass_for(method, spp=20) == (10 if "lightcuts" in method else 1)
