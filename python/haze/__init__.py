@@ -96,7 +96,7 @@ class Scene:
         spp: int | None = None,
         time: float | None = None,
         seed: int = 0,
-        spp_per_pass: int = 1,
+        spp_per_pass: int | None = None,
         components: bool = False,
         vrls: int | None = None,
         light_paths: int | None = None,
@@ -119,7 +119,7 @@ class Scene:
         spp: int | None = None,
         time: float | None = None,
         seed: int = 0,
-        spp_per_pass: int = 1,
+        spp_per_pass: int | None = None,
         components: bool = False,
         vrls: int | None = None,
         light_paths: int | None = None,
@@ -143,7 +143,7 @@ class Scene:
         count: int = 1,
         *,
         seed: int = 0,
-        spp_per_pass: int = 1,
+        spp_per_pass: int | None = None,
         components: bool = False,
         vrls: int | None = None,
         light_paths: int | None = None,
@@ -187,6 +187,20 @@ class Scene:
         medium. Lightcut methods only; the options are those of :meth:`render` without the
         sample budget."""
         return self._inner.cut_sizes(integrator, **_given(locals()))
+
+    def spp_per_pass_for(
+        self,
+        integrator: str | None = "vrl_lightcuts",
+        *,
+        spp: int | None = None,
+        time: float | None = None,
+        spp_per_pass: int | None = None,
+    ) -> int:
+        """The samples per pixel of each pass of a render of this scene with ``integrator`` and
+        the budget ``spp`` (default: the scene's) or ``time``: ``spp_per_pass`` when given,
+        else the engine's auto default for the method, the image size and the budget (as
+        ``haze render`` prints it; see ``spp_per_pass`` in :data:`OPTIONS`)."""
+        return self._inner.spp_per_pass(integrator, **_given(locals()))
 
     def __repr__(self) -> str:
         return repr(self._inner)

@@ -58,6 +58,8 @@ class Scene:
     def cut_sizes(self, integrator: Optional[str] = None, **options: Any) -> npt.NDArray[np.float32]: ...
     def check_options(self, integrator: Optional[str] = None, **options: Any) -> str:
         """Checks the options for the method as render would; returns the method's name."""
+    def spp_per_pass(self, integrator: Optional[str] = None, **options: Any) -> int:
+        """The spp per pass a render with these options uses (given, or the engine's auto default)."""
 
 def method_options() -> list[dict[str, Any]]:
     """The engine's table of options, one dict per option."""

@@ -138,7 +138,7 @@ def render(
     spp: int | None = None,
     time: float | None = None,
     seed: int = 0,
-    spp_per_pass: int = 1,
+    spp_per_pass: int | None = None,
     components: bool = False,
     vrls: int | None = None,
     light_paths: int | None = None,
@@ -161,10 +161,12 @@ def render(
     """Renders the scene's passes as Ray tasks and merges them exactly.
 
     The budget is ``spp`` samples per pixel (default: the scene's ``sample_count``), that is
-    ``spp / spp_per_pass`` passes (``spp`` must be a multiple of ``spp_per_pass``), or ``time``
-    seconds. With ``spp`` the result equals, bit for bit, ``haze.load_scene(scene_path,
-    **defaults).render_passes(integrator, first_pass, spp // spp_per_pass, ...)``, whatever the
-    cluster size. With ``time`` the driver hands out blocks of passes in order (``first_pass``,
+    ``spp / spp_per_pass`` passes (``spp`` must be a multiple of ``spp_per_pass``; by default
+    the engine's auto value for the method, image size and budget,
+    ``Scene.spp_per_pass_for(integrator, spp=spp)``), or ``time`` seconds. With ``spp`` the
+    result equals, bit for bit, ``haze.load_scene(scene_path, **defaults).render_passes(integrator,
+    first_pass, spp // spp_per_pass, spp_per_pass=spp_per_pass, ...)``, whatever the cluster
+    size. With ``time`` the driver hands out blocks of passes in order (``first_pass``,
     then the next block, ...) to keep every worker busy while time remains, and stops handing
     them out at the deadline; the blocks already handed out are finished (so the render may
     overrun by about one block's time), and the result is the film of the ``N`` passes
@@ -203,7 +205,11 @@ def render(
     scene = haze.load_scene(scene_path, **dict(defines))
     # The engine checks every option on the driver, before any task starts.
     scene._inner.check_options(integrator, **given)
+    # The engine's value (given, or its auto default for the method and image size), fixed
+    # here so the driver's pass count and every worker's passes agree.
+    spp_per_pass = scene._inner.spp_per_pass(integrator, **given)
     options = {k: v for k, v in given.items() if k not in ("spp", "time")}
+    options["spp_per_pass"] = spp_per_pass
     bundle, scene_name = _bundle_of(scene)
     key = _bundle_key(bundle, defines)
     if not ray.is_initialized():

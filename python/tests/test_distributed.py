@@ -141,6 +141,10 @@ def test_the_command_line_takes_the_engines_options(cluster, small_box, tmp_path
     out = tmp_path / "d.exr"
     args = [str(small_box), "-o", str(out), "--spp", "2", "--vrls", "300", "--cut", "bound", "--max-cut", "50"]
     assert distributed.main(args + ["--seed", "3", "-q"]) == 0
-    single = haze.load_scene(small_box).render_passes(first=0, count=2, seed=3, vrls=300, cut="bound", max_cut=50)
+    # Auto spp per pass for 2 spp: one pass of 2 (the rule's 64 at 32x24, cut to a divisor of spp).
+    scene = haze.load_scene(small_box)
+    n = scene.spp_per_pass_for(spp=2)
+    assert n == 2
+    single = scene.render_passes(first=0, count=2 // n, seed=3, spp_per_pass=n, vrls=300, cut="bound", max_cut=50)
     assert np.array_equal(haze.read_exr(out), single.mean())
     assert distributed.main([str(small_box), "-o", str(out), "--integrator", "vrl", "--max-cut", "5", "-q"]) == 2

@@ -3,12 +3,15 @@ the table `haze render --help` and `haze compare` are made from): same names, sa
 and an option of another method is a ValueError naming both."""
 
 import inspect
+import re
+import subprocess
 
 import numpy as np
 
 import pytest
 
 import haze
+from conftest import haze_binary, small_scene_text
 from haze import _haze
 
 TABLE = {o["name"]: o for o in _haze.method_options()}
@@ -59,6 +62,10 @@ def test_the_table_lists_every_command_line_option():
     assert TABLE["cut"]["default"] == "stochastic" and TABLE["max_cut"]["requires"] == ("cut", "bound")
     assert TABLE["vpl_clamp"]["methods"] == ["vpl"]
     assert TABLE["seed"]["python_default"] == 0 and TABLE["components"]["python_default"] is False
+    # spp_per_pass's default is auto (per method and image size): None in the signatures.
+    spp_per_pass = TABLE["spp_per_pass"]
+    assert spp_per_pass["python_default"] is None and spp_per_pass["default_doc"].startswith("auto: ")
+    assert spp_per_pass["scope"] == "pass"
     assert haze.METHOD_NAMES == ("volpath", "vrl", "vpl", "vrl_lightcuts", "vpl_lightcuts")
 
 
@@ -70,7 +77,7 @@ def test_signatures_have_every_option_with_the_engine_defaults():
     lightcuts = {"vrl_lightcuts", "vpl_lightcuts"}
     check_signature(
         haze.Scene.cut_sizes,
-        skip=[n for n, o in TABLE.items() if n != "seed" and (o["scope"] == "render" or not lightcuts & set(o["methods"]))],
+        skip=[n for n, o in TABLE.items() if n != "seed" and (o["scope"] != "method" or not lightcuts & set(o["methods"]))],
     )
     distributed = pytest.importorskip("haze.distributed", reason="haze.distributed needs Ray")
     check_signature(distributed.render)
@@ -141,3 +148,26 @@ def test_new_options_reach_the_render(small_box):
     assert not np.array_equal(a, scene.render("vrl_lightcuts", builder="median", **base))
     v = scene.render("vpl", **base)
     assert not np.array_equal(v, scene.render("vpl", vpl_clamp=1e-3, **base))
+
+
+def test_spp_per_pass_is_the_command_lines(tmp_path):
+    """Python's spp per pass is the engine's, as ``haze render`` prints it: auto per method and
+    image size (16 for the lightcut methods at 128x128, 1 for the others), or the given value;
+    the films of ``render_passes`` hold that many samples per pass."""
+    path = tmp_path / "box-128.xml"
+    path.write_text(small_scene_text(128, 128))
+    scene = haze.load_scene(path)
+    lights = ["--light-paths", "10"]
+    for method in haze.METHOD_NAMES:
+        many_light = method != "volpath"
+        args = [haze_binary(), "render", path, "--integrator", method, "--spp", "16", "-q", "-o", tmp_path / "x.exr"]
+        err = subprocess.run(args + (lights if many_light else []), capture_output=True, text=True, check=True).stderr
+        printed = re.search(rf"^{method}: spp per pass (\d+) \(auto", err, re.M)
+        assert printed, err
+        want = 16 if "lightcuts" in method else 1
+        assert int(printed.group(1)) == scene.spp_per_pass_for(method, spp=16) == want
+        # render_passes: the scene's budget (64 spp, a multiple of 16).
+        film = scene.render_passes(method, 0, 1, light_paths=10 if many_light else None)
+        assert film.samples == scene.spp_per_pass_for(method) == want
+        assert scene.spp_per_pass_for(method, spp=16, spp_per_pass=3) == 3
+        assert scene.spp_per_pass_for(method, spp=20) == (10 if "lightcuts" in method else 1)

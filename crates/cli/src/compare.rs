@@ -21,7 +21,8 @@ use std::time::{Duration, Instant};
 /// `vrl_lightcuts:100k,cut_size=2`, `vpl_lightcuts:1M,cut=bound,bound=tight`. `LIGHTS` is `vrls`, the
 /// number of virtual lights traced per pass (about; the light-path count is fixed from a pilot
 /// run); it accepts the suffixes `k` (x1000) and `M` (x1000000). The keys are the method options
-/// of the engine's table (`haze_engine::options`, scope `Method`), checked by the engine.
+/// of the engine's table (`haze_engine::options`, scope `Method`) and `spp_per_pass` (scope
+/// `Pass`), checked by the engine.
 #[derive(Clone, Debug)]
 pub struct MethodSpec {
     pub kind: MethodKind,
@@ -29,6 +30,15 @@ pub struct MethodSpec {
     pub given: Vec<(&'static str, String)>,
     /// The resolved options.
     pub options: MethodOptions,
+    /// `spp_per_pass=N` of the spec (`None`: `--spp-per-pass`, else the engine's auto default).
+    pub spp_per_pass: Option<u32>,
+}
+
+/// The options a `--method` spec takes as `KEY=VALUE`: the method options and how its samples
+/// are grouped into passes (not the render's budget or seed, which `haze compare` sets for
+/// every method alike).
+fn spec_key(spec: &options::OptionSpec) -> bool {
+    spec.scope != Scope::Render
 }
 
 impl MethodSpec {
@@ -75,12 +85,9 @@ impl FromStr for MethodSpec {
             };
             let key = key.trim();
             match options::find(key) {
-                Some(spec) if spec.scope == Scope::Method => {
-                    given.push((spec.name, value.trim().to_string()))
-                }
+                Some(spec) if spec_key(spec) => given.push((spec.name, value.trim().to_string())),
                 _ => {
-                    let known: Vec<&str> =
-                        OPTIONS.iter().filter(|o| o.scope == Scope::Method).map(|o| o.name).collect();
+                    let known: Vec<&str> = OPTIONS.iter().filter(|o| spec_key(o)).map(|o| o.name).collect();
                     return Err(format!("'{s}': unknown option '{key}' (available: {})", known.join(", ")));
                 }
             }
@@ -88,7 +95,7 @@ impl FromStr for MethodSpec {
         let pairs: Vec<(&str, &str)> = given.iter().map(|(n, v)| (*n, v.as_str())).collect();
         let resolved =
             options::resolve(kind, &pairs, Spelling::Keyword).map_err(|e| format!("'{s}': {e}"))?;
-        Ok(MethodSpec { kind, given, options: resolved.method })
+        Ok(MethodSpec { kind, given, options: resolved.method, spp_per_pass: resolved.spp_per_pass })
     }
 }
 
@@ -139,7 +146,8 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Camera samples per pixel of every method's passes (many-light methods share a pass's
-    /// lights between them); default: haze render's.
+    /// lights between them). Default: per method, `spp_per_pass=N` of its `--method` spec, else
+    /// haze render's auto default for the method and image size (`haze render --help`).
     #[arg(long)]
     pub spp_per_pass: Option<String>,
     /// Worker threads (default: all cores).
@@ -216,6 +224,28 @@ pub fn run_method(
     })
 }
 
+/// The spp per pass of `spec` on `scene`, and where it comes from: `every` (`--spp-per-pass`),
+/// the spec's `spp_per_pass=N`, or the engine's auto default (`Options::spp_per_pass_for`).
+/// Both given is an error: neither silently wins.
+fn spp_per_pass(
+    spec: &MethodSpec,
+    every: Option<u32>,
+    time: f64,
+    scene: &haze_scene::Scene,
+) -> Result<(u32, &'static str)> {
+    let (given, how) = match (every, spec.spp_per_pass) {
+        (Some(_), Some(_)) => {
+            bail!("{spec}: give either --spp-per-pass or spp_per_pass in --method, not both")
+        }
+        (Some(n), None) => (Some(n), "--spp-per-pass"),
+        (None, Some(n)) => (Some(n), "given"),
+        (None, None) => (None, "auto"),
+    };
+    // Compare's budget is time, not a sample count.
+    let options = options::Options { spp_per_pass: given, time: Some(time), ..options::Options::defaults() };
+    Ok((options.spp_per_pass_for(spec.kind, scene), how))
+}
+
 /// Checks a number of seconds as the engine checks `time`.
 fn seconds(flag: &str, t: f64) -> Result<()> {
     let spec = options::find("time").expect("the engine's time option");
@@ -284,17 +314,17 @@ pub fn run(args: CompareArgs) -> Result<()> {
         );
     }
     let budget = crate::limits::seconds("--time", args.time)?;
-    let spp_per_pass = match &args.spp_per_pass {
+    let every = match &args.spp_per_pass {
         Some(text) => {
             let spec = options::find("spp_per_pass").expect("the table has spp_per_pass");
-            let o = options::resolve(MethodKind::VolPath, &[(spec.name, text)], Spelling::Flag)?;
-            o.spp_per_pass
+            options::resolve(MethodKind::VolPath, &[(spec.name, text)], Spelling::Flag)?.spp_per_pass
         }
-        None => options::Options::defaults().spp_per_pass,
+        None => None,
     };
     let mut results = Vec::new();
     for spec in &args.methods {
-        eprintln!("{spec}: rendering for {:.1} s", args.time);
+        let (spp_per_pass, how) = spp_per_pass(spec, every, args.time, &scene)?;
+        eprintln!("{spec}: rendering for {:.1} s, spp per pass {spp_per_pass} ({how})", args.time);
         let r = run_method(&scene, spec, &reference.data, budget, args.seed, spp_per_pass)
             .with_context(|| format!("{}: method {spec}", args.scene.display()))?;
         let img = RgbImage::new(w, h, r.image.clone());
@@ -383,7 +413,7 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
 
 /// The help of `--method`, with the engine's method names and method options.
 fn method_help() -> String {
-    let keys: Vec<&str> = OPTIONS.iter().filter(|o| o.scope == Scope::Method).map(|o| o.name).collect();
+    let keys: Vec<&str> = OPTIONS.iter().filter(|o| spec_key(o)).map(|o| o.name).collect();
     format!(
         "A method to compare (repeatable): NAME[:LIGHTS][,KEY=VALUE]..., NAME one of {}, LIGHTS the \
          virtual lights per pass (vrls; e.g. 10000, 100k, 1M), KEY one of {} (as `haze render \
@@ -464,7 +494,7 @@ mod tests {
 
     #[test]
     fn every_method_option_with_every_method_is_used_or_rejected_naming_both() {
-        for o in OPTIONS.iter().filter(|o| o.scope == Scope::Method) {
+        for o in OPTIONS.iter().filter(|o| spec_key(o)) {
             for m in MethodKind::ALL {
                 // An option that needs another's value (`epsilon` needs `cut=bound`) gets it.
                 let requirement = match o.requires.filter(|_| o.applies_to.contains(&m)) {
@@ -475,8 +505,11 @@ mod tests {
                 match s.parse::<MethodSpec>() {
                     Ok(spec) => {
                         assert!(o.applies_to.contains(&m), "{s} accepted");
-                        let resolved =
-                            options::Options { method: spec.options, ..options::Options::defaults() };
+                        let resolved = options::Options {
+                            method: spec.options,
+                            spp_per_pass: spec.spp_per_pass,
+                            ..options::Options::defaults()
+                        };
                         assert_eq!(o.value_in(&resolved).as_deref(), Some(o.example), "{s}");
                     }
                     Err(e) => {
@@ -486,6 +519,29 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Each method gets its own auto spp per pass (16 for the lightcut methods at 128x128, 1
+    /// for the others), its spec's `spp_per_pass=N`, or `--spp-per-pass` for all.
+    #[test]
+    fn spp_per_pass_is_per_method() {
+        let xml = r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
+            <integer name="width" value="128"/><integer name="height" value="128"/></film></sensor></scene>"#;
+        let path = std::path::Path::new("t.xml");
+        let scene = haze_scene::load_str(xml, path, std::path::Path::new("."), &Default::default()).unwrap();
+        let of = |s: &str, every| spp_per_pass(&spec(s), every, 1.0, &scene).map_err(|e| e.to_string());
+        assert_eq!(of("vrl_lightcuts:1000", None), Ok((16, "auto")));
+        assert_eq!(of("vpl_lightcuts", None), Ok((16, "auto")));
+        for s in ["vrl:1000", "vpl", "volpath"] {
+            assert_eq!(of(s, None), Ok((1, "auto")), "{s}");
+        }
+        assert_eq!(of("vrl_lightcuts:1000,spp_per_pass=4", None), Ok((4, "given")));
+        assert_eq!(of("volpath,spp_per_pass=8", None), Ok((8, "given")));
+        assert_eq!(of("vrl_lightcuts", Some(2)), Ok((2, "--spp-per-pass")));
+        assert!(of("vrl,spp_per_pass=4", Some(2)).unwrap_err().contains("give either --spp-per-pass"));
+        assert_eq!(spec("vrl:10,spp_per_pass=3").to_string(), "vrl:10,spp_per_pass=3");
+        let e = "vrl,spp_per_pass=0".parse::<MethodSpec>().unwrap_err();
+        assert!(e.contains("spp_per_pass must be a positive integer"), "{e}");
     }
 
     #[test]

@@ -202,10 +202,13 @@ pub fn render_and_write(
     if let Some(w) = scene.integrator.path_cap_warning() {
         eprintln!("warning: {w}");
     }
-    let settings = options.render_settings(scene);
+    let settings = options.render_settings(kind, scene);
     let described = options.describe(kind);
     if !described.is_empty() {
         eprintln!("{kind}: {described}");
+    }
+    if options.spp_per_pass.is_none() {
+        eprintln!("{kind}: spp per pass {} (auto; --spp-per-pass sets it)", settings.spp_per_pass);
     }
     let cancel = install_interrupt_handler();
     let cam = &scene.camera;

@@ -163,6 +163,8 @@ fn cut_image_is_a_heat_map_of_the_image_size() {
             &[
                 "-D",
                 "res=24",
+                "-D",
+                "res_y=24",
                 "--spp",
                 "1",
                 "--integrator",

@@ -65,7 +65,17 @@ fn compare_writes_table_images_and_report() {
         args.extend(["--method".to_string(), m.to_string()]);
     }
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let table = check(&haze(&args), "haze compare");
+    let o = haze(&args);
+    let table = check(&o, "haze compare");
+    // Each method at its own auto spp per pass: the lightcut methods' rule gives 64 (its
+    // clamp) at 16x12 pixels, the others 1.
+    let err = stderr(&o);
+    for (m, spp) in
+        [("volpath", 1), ("vrl:200", 1), ("vrl_lightcuts:1000,cut_size=2", 64), ("vpl_lightcuts:2000", 64)]
+    {
+        let want = format!("{m}: rendering for 0.3 s, spp per pass {spp} (auto)");
+        assert!(err.lines().any(|l| l == want), "`{want}` not in\n{err}");
+    }
 
     assert!(table
         .starts_with("| method | lights | time (s) | passes | RMSE | SMAPE (%) | relMSE | mean cut size |"));

@@ -55,7 +55,8 @@ fn help_options(text: &str) -> Vec<(String, Option<char>)> {
 fn render(method: MethodKind, extra: &[&str]) -> Output {
     let scene = repo("scenes/bench-smoke-room.xml");
     let out = tmp(&format!("{method}.exr"));
-    let mut args = vec!["render", s(&scene), "-o", s(&out), "-D", "res=8", "-D", "spp=1", "--quiet"];
+    let mut args =
+        vec!["render", s(&scene), "-o", s(&out), "-D", "res=8", "-D", "res_y=8", "-D", "spp=1", "--quiet"];
     args.extend(["--integrator", method.name()]);
     let budget_given = extra.iter().any(|a| *a == "--vrls" || *a == "--light-paths");
     if method != MethodKind::VolPath && !budget_given {
@@ -138,6 +139,35 @@ fn every_option_with_every_method_is_used_or_rejected_naming_both() {
             );
         }
     }
+}
+
+/// `haze render` says when it picked spp per pass itself, and renders in passes of that many
+/// samples: the engine's auto rule gives 64 (its clamp) for the lightcut methods at 8x8 pixels,
+/// 1 for the others; a given value is used as given, without the line.
+#[test]
+fn render_prints_and_uses_the_auto_spp_per_pass() {
+    for (method, spp_per_pass) in
+        [(MethodKind::VrlLightcuts, 64), (MethodKind::VplLightcuts, 64), (MethodKind::Vrl, 1)]
+    {
+        let o = render(method, &["--spp", "128"]);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{method}: {err}");
+        let want = format!("{method}: spp per pass {spp_per_pass} (auto; --spp-per-pass sets it)");
+        assert!(err.lines().any(|l| l == want), "`{want}` not in\n{err}");
+        let passes = format!("({} passes,", 128 / spp_per_pass);
+        assert!(err.contains("at 128 spp in") && err.contains(&passes), "{method}: {err}");
+        let o = render(method, &["--spp", "128", "--spp-per-pass", "32"]);
+        let err = stderr(&o);
+        assert!(o.status.success() && !err.contains("(auto"), "{method}: {err}");
+        assert!(err.contains("(4 passes,"), "{method}: {err}");
+    }
+    // `--help` gives the rule and where it comes from.
+    let text = help("render");
+    let spp_per_pass = text.split("--spp-per-pass").nth(1).unwrap().split("\n  -").next().unwrap();
+    let flat = spp_per_pass.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(flat.contains("Default: auto: for vrl_lightcuts and vpl_lightcuts"), "{flat}");
+    assert!(flat.contains("clamp(round(262144 / (width * height)), 1, 64)"), "{flat}");
+    assert!(flat.contains("docs/lightcuts.md"), "{flat}");
 }
 
 #[test]

@@ -236,6 +236,11 @@ pub enum Scope {
     Render,
     /// The method: `haze compare` takes these per method (`--method vrl_lightcuts,epsilon=0.01`).
     Method,
+    /// How a method's samples are grouped into passes (`spp_per_pass`): its default depends on
+    /// the method, so `haze compare` takes it per method (`--method vrl_lightcuts,spp_per_pass=16`)
+    /// or for every method at once (`--spp-per-pass`); not a method option of
+    /// [`Options::describe`] (the render prints it with the sample budget).
+    Pass,
 }
 
 /// How a front end spells option names in messages.
@@ -381,15 +386,23 @@ pub const OPTIONS: &[OptionSpec] = &[
     OptionSpec {
         name: "spp_per_pass",
         kind: Kind::Count { max: u32::MAX as u64 },
-        default: Default::Value("1"),
-        help: "Samples per pixel in each progressive pass.",
+        default: Default::Unset(
+            "auto: for vrl_lightcuts and vpl_lightcuts about 262144 camera samples per pass, \
+             clamp(round(262144 / (width * height)), 1, 64): 16 at 128x128, where 16 beat 4 \
+             and 1 at equal time (docs/lightcuts.md \"Choosing the defaults\"), and 1 at \
+             640x360 and above; with an spp budget the largest divisor of spp up to that, so \
+             passes are equal; 1 for the other methods (brute-force vrl and vpl cost per \
+             sample grows with the light count, volpath batches passes)",
+        ),
+        help: "Samples per pixel in each progressive pass; the many-light methods trace one light \
+               set per pass (and the lightcut methods build one tree) for all of them.",
         applies_to: ALL,
         conflicts_with: &[],
         requires: None,
-        scope: Scope::Render,
+        scope: Scope::Pass,
         example: "2",
-        set: |o, v| o.spp_per_pass = v.int() as u32,
-        get: |o| Some(o.spp_per_pass.to_string()),
+        set: |o, v| o.spp_per_pass = Some(v.int() as u32),
+        get: |o| o.spp_per_pass.map(|n| n.to_string()),
     },
     OptionSpec {
         name: "components",
@@ -600,9 +613,38 @@ pub struct Options {
     pub spp: Option<u32>,
     pub time: Option<f64>,
     pub seed: u64,
-    pub spp_per_pass: u32,
+    /// `None`: auto, the method's default for the image size ([`auto_spp_per_pass`]).
+    pub spp_per_pass: Option<u32>,
     pub components: bool,
     pub method: MethodOptions,
+}
+
+/// Camera samples per pass the lightcut methods aim at when `spp_per_pass` is auto. Measured at
+/// 128x128 only (docs/lightcuts.md "Choosing the defaults"): 16 spp per pass (262,144 samples
+/// sharing a pass's light set and tree) beat 4 and 1 at equal time, because tracing the lights
+/// and building the tree is a fixed cost per pass that more samples amortise. Other sizes keep
+/// the samples per pass, not the spp (an extrapolation, not measured): at 640x360 one sample
+/// per pixel is already 230,400 samples, and more spp per pass would only coarsen the time
+/// budget's granularity.
+pub const LIGHTCUT_SAMPLES_PER_PASS: u64 = 262_144;
+
+/// Most spp per pass auto picks (tiny images): a pass stays short enough for `--time`, Ctrl-C
+/// and the progress bar, which act at pass ends.
+pub const AUTO_SPP_PER_PASS_MAX: u32 = 64;
+
+/// The rule behind `spp_per_pass`'s auto default, for every front end: for the lightcut
+/// methods `clamp(round(LIGHTCUT_SAMPLES_PER_PASS / (width * height)), 1,
+/// AUTO_SPP_PER_PASS_MAX)` (16 at 128x128, 1 at 640x360); 1 for the others, since brute-force
+/// `vrl`/`vpl` cost per camera sample is proportional to the light count (nothing to amortise:
+/// a 16-spp pass of 10k VRLs takes minutes) and volpath batches its passes anyway
+/// (`passes_batchable`).
+pub fn auto_spp_per_pass(method: MethodKind, width: u32, height: u32) -> u32 {
+    if !method.is_lightcuts() {
+        return 1;
+    }
+    let pixels = (width as u64 * height as u64).max(1);
+    let spp = (LIGHTCUT_SAMPLES_PER_PASS as f64 / pixels as f64).round();
+    spp.clamp(1.0, AUTO_SPP_PER_PASS_MAX as f64) as u32
 }
 
 impl Options {
@@ -612,7 +654,7 @@ impl Options {
             spp: None,
             time: None,
             seed: 0,
-            spp_per_pass: 1,
+            spp_per_pass: None,
             components: false,
             // Placeholders: the table's defaults below set every field an option owns.
             method: MethodOptions {
@@ -631,23 +673,40 @@ impl Options {
         o
     }
 
-    /// The progressive render's settings: `spp` samples (default: the scene's) or `time` seconds.
-    pub fn render_settings(&self, scene: &Scene) -> RenderSettings {
+    /// The spp per pass of a render of `scene` with `method`: the given value, else auto:
+    /// [`auto_spp_per_pass`] for the camera's image size, and with a sample budget (`spp`, default
+    /// the scene's; not with `time`) the largest divisor of it not above that, so that the
+    /// budget is whole passes of equal size (what a distributed render, `spp / spp_per_pass`
+    /// passes, needs; 2 spp at 128x128 are one pass of 2). Every front end asks this.
+    pub fn spp_per_pass_for(&self, method: MethodKind, scene: &Scene) -> u32 {
+        if let Some(n) = self.spp_per_pass {
+            return n;
+        }
+        let auto = auto_spp_per_pass(method, scene.camera.width, scene.camera.height);
+        match (self.time, self.spp.unwrap_or(scene.spp)) {
+            (None, spp) if spp > 0 => (1..=auto).rev().find(|d| spp % d == 0).unwrap_or(1),
+            _ => auto,
+        }
+    }
+
+    /// The progressive render's settings for `method`: `spp` samples (default: the scene's) or
+    /// `time` seconds, in passes of [`Options::spp_per_pass_for`] samples.
+    pub fn render_settings(&self, method: MethodKind, scene: &Scene) -> RenderSettings {
         RenderSettings {
             spp: if self.time.is_some() { 0 } else { self.spp.unwrap_or(scene.spp) },
             time_limit: self.time.map(std::time::Duration::from_secs_f64),
             seed: self.seed,
-            spp_per_pass: self.spp_per_pass,
+            spp_per_pass: self.spp_per_pass_for(method, scene),
             components: self.components,
             first_pass: 0,
         }
     }
 
     /// The settings of `passes::render_passes` (which renders a pass range: no `spp` or `time`).
-    pub fn pass_settings(&self) -> crate::passes::PassSettings {
+    pub fn pass_settings(&self, method: MethodKind, scene: &Scene) -> crate::passes::PassSettings {
         crate::passes::PassSettings {
             seed: self.seed,
-            spp_per_pass: self.spp_per_pass,
+            spp_per_pass: self.spp_per_pass_for(method, scene),
             components: self.components,
         }
     }
@@ -771,7 +830,7 @@ mod tests {
             assert!(spec.name.chars().all(|c| c.is_ascii_lowercase() || c == '_'), "{}", spec.name);
             assert!(OPTIONS[..i].iter().all(|o| o.name != spec.name), "{} twice", spec.name);
             assert!(!spec.applies_to.is_empty(), "{}", spec.name);
-            if spec.scope == Scope::Render {
+            if spec.scope != Scope::Method {
                 assert!(spec.applies_to_all(), "{} sets the whole render", spec.name);
             }
             for c in spec.conflicts_with {
@@ -799,7 +858,7 @@ mod tests {
         let CutSettings { epsilon, max_cut } = lc.cut;
         assert_eq!((o.method.lightcuts.cut.epsilon, o.method.lightcuts.cut.max_cut), (epsilon, max_cut));
         assert_eq!((o.method.lightcuts.bound, o.method.lightcuts.builder), (lc.bound, lc.builder));
-        assert_eq!((o.spp, o.time, o.seed, o.spp_per_pass, o.components), (None, None, 0, 1, false));
+        assert_eq!((o.spp, o.time, o.seed, o.spp_per_pass, o.components), (None, None, 0, None, false));
         assert_eq!(o.method.vpl_clamp, None);
         assert_eq!(
             (o.method.lightcuts.strategy, o.method.lightcuts.stochastic),
@@ -894,6 +953,53 @@ mod tests {
         assert_eq!(
             ok(VrlLightcuts, &[("light_paths", "5"), ("max_cut", "9")]).describe(VrlLightcuts),
             "light_paths=5 cut=bound epsilon=0.02 max_cut=9 bound=paper builder=agglomerative"
+        );
+    }
+
+    /// A scene rendering `width` x `height` pixels.
+    fn scene(width: u32, height: u32) -> Scene {
+        let xml = format!(
+            r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
+               <integer name="width" value="{width}"/><integer name="height" value="{height}"/>
+               </film></sensor></scene>"#
+        );
+        let p = std::path::Path::new("t.xml");
+        haze_scene::load_str(&xml, p, std::path::Path::new("."), &haze_scene::LoadOptions::default()).unwrap()
+    }
+
+    /// Auto spp per pass: about 262,144 camera samples per pass for the lightcut methods, 1 for
+    /// the others; a given value wins, for every method and size.
+    #[test]
+    fn spp_per_pass_is_auto_per_method_and_image_size() {
+        let (small, wide) = (scene(128, 128), scene(640, 360));
+        let auto = ok(Vrl, &[("spp", "1024")]);
+        let timed = ok(Vrl, &[("time", "1")]);
+        for m in MethodKind::ALL {
+            assert_eq!(timed.spp_per_pass_for(m, &small), if m.is_lightcuts() { 16 } else { 1 });
+            let want = if m.is_lightcuts() { 16 } else { 1 };
+            assert_eq!(auto.spp_per_pass_for(m, &small), want, "{m} at 128x128");
+            assert_eq!(auto.spp_per_pass_for(m, &wide), 1, "{m} at 640x360");
+            assert_eq!(auto.render_settings(m, &small).spp_per_pass, want, "{m}");
+            assert_eq!(auto.pass_settings(m, &small).spp_per_pass, want, "{m}");
+            let given = ok(m, &[("spp_per_pass", "3")]);
+            assert_eq!((given.spp_per_pass_for(m, &small), given.spp_per_pass_for(m, &wide)), (3, 3));
+            assert_eq!(given.render_settings(m, &small).spp_per_pass, 3);
+        }
+        // A sample budget is whole passes: the largest divisor of spp up to the rule's value
+        // (the scene's spp, Mitsuba's default 4, without a given one).
+        for (spp, want) in [("100", 10), ("2", 2), ("17", 1), ("48", 16)] {
+            assert_eq!(ok(Vrl, &[("spp", spp)]).spp_per_pass_for(VrlLightcuts, &small), want, "{spp}");
+        }
+        assert_eq!(Options::defaults().spp_per_pass_for(VplLightcuts, &small), small.spp.min(16));
+        // Rounded, then clamped to 1 ..= 64.
+        assert_eq!(auto_spp_per_pass(VplLightcuts, 256, 128), 8);
+        assert_eq!(auto_spp_per_pass(VrlLightcuts, 100, 100), 26);
+        assert_eq!(auto_spp_per_pass(VrlLightcuts, 32, 24), 64);
+        assert_eq!(auto_spp_per_pass(VrlLightcuts, 1920, 1080), 1);
+        assert_eq!(auto_spp_per_pass(Vrl, 1, 1), 1);
+        // Explicit values are still checked.
+        assert!(
+            err(VrlLightcuts, &[("spp_per_pass", "0")], Spelling::Flag).contains("--spp-per-pass must be")
         );
     }
 

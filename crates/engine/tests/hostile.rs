@@ -17,5 +17,8 @@ fn huge_time_budget_is_an_error_not_a_panic() {
     let xml = r#"<scene version="3.0.0"><sensor type="perspective"/></scene>"#;
     let scene = load_str(xml, Path::new("t.xml"), Path::new("."), &LoadOptions::default()).unwrap();
     let ok = resolve(MethodKind::VolPath, &[("time", "2")], Spelling::Flag).unwrap();
-    assert_eq!(ok.render_settings(&scene).time_limit, Some(std::time::Duration::from_secs(2)));
+    assert_eq!(
+        ok.render_settings(MethodKind::VolPath, &scene).time_limit,
+        Some(std::time::Duration::from_secs(2))
+    );
 }

@@ -120,7 +120,7 @@ fn trace_lights<'py>(
 /// `name`, `flag` (`--max-cut`), `kind` (`count`, `integer`, `number`, `choice`, `flag`),
 /// `choices` (a list, or None), `default` (the default as text, or None when unset),
 /// `default_doc` (what the default is, in words), `help` (with the methods and the default),
-/// `methods` (the methods it applies to), `scope` (`render` or `method`), `conflicts_with`,
+/// `methods` (the methods it applies to), `scope` (`render`, `pass` or `method`), `conflicts_with`,
 /// `requires` (`None` or `(option, value)`: the option applies only with that value),
 /// `example` (a valid non-default value) and `python_default`: the default a Python signature
 /// shows, the value itself for options of every method that have one, else None (not given).
@@ -143,7 +143,12 @@ fn method_options(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
             d.set_item("default_doc", doc)?;
             d.set_item("help", o.help_text())?;
             d.set_item("methods", o.applies_to.iter().map(|m| m.name()).collect::<Vec<_>>())?;
-            d.set_item("scope", if o.scope == Scope::Render { "render" } else { "method" })?;
+            let scope = match o.scope {
+                Scope::Render => "render",
+                Scope::Pass => "pass",
+                Scope::Method => "method",
+            };
+            d.set_item("scope", scope)?;
             d.set_item("conflicts_with", o.conflicts_with.to_vec())?;
             d.set_item("example", o.example)?;
             d.set_item("requires", o.requires)?;

@@ -4,7 +4,7 @@ use crate::film::Film;
 use crate::{interrupt, value_error, SceneError};
 use haze_engine::passes::render_passes;
 use haze_engine::scene::{load_file_with_sources, LoadError, LoadOptions};
-use haze_engine::{prepare, Method, Options, Spelling};
+use haze_engine::{prepare, Method, MethodKind, Options, Spelling};
 use numpy::PyArrayMethods;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -69,10 +69,10 @@ fn method(
     scene: &haze_engine::scene::Scene,
     integrator: Option<&str>,
     given: &[(String, String)],
-) -> anyhow::Result<(Method, Options)> {
+) -> anyhow::Result<(MethodKind, Method, Options)> {
     let pairs: Vec<(&str, &str)> = given.iter().map(|(n, v)| (n.as_str(), v.as_str())).collect();
     let (kind, options) = prepare(scene, integrator, &pairs, Spelling::Keyword)?;
-    Ok((Method::build(scene, kind, &options.method, options.seed)?, options))
+    Ok((kind, Method::build(scene, kind, &options.method, options.seed)?, options))
 }
 
 #[pymethods]
@@ -124,8 +124,8 @@ impl Scene {
         let given = given(options)?;
         let scene = self.inner.clone();
         let out = interrupt::run(py, move |cancel| -> anyhow::Result<_> {
-            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
-            Ok(m.render(&scene, &options.render_settings(&scene), cancel, |_| {}))
+            let (kind, m, options) = method(&scene, integrator.as_deref(), &given)?;
+            Ok(m.render(&scene, &options.render_settings(kind, &scene), cancel, |_| {}))
         })?
         .map_err(value_error)?;
         Ok(Film { inner: out.film })
@@ -152,9 +152,9 @@ impl Scene {
         }
         let scene = self.inner.clone();
         let out = interrupt::run(py, move |cancel| -> anyhow::Result<_> {
-            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
+            let (kind, m, options) = method(&scene, integrator.as_deref(), &given)?;
             let end = first.checked_add(count).ok_or_else(|| anyhow::anyhow!("pass indices overflow"))?;
-            render_passes(&m, &scene, &options.pass_settings(), first..end, cancel, |_| {})
+            render_passes(&m, &scene, &options.pass_settings(kind, &scene), first..end, cancel, |_| {})
         })?
         .map_err(value_error)?;
         Ok(Film { inner: out.film })
@@ -180,7 +180,7 @@ impl Scene {
         }
         let scene = self.inner.clone();
         let sizes = interrupt::run(py, move |_| -> anyhow::Result<_> {
-            let (m, options) = method(&scene, integrator.as_deref(), &given)?;
+            let (_, m, options) = method(&scene, integrator.as_deref(), &given)?;
             m.cut_sizes(&scene, options.seed)
         })?
         .map_err(value_error)?;
@@ -201,6 +201,19 @@ impl Scene {
         let (kind, _) =
             prepare(&self.inner, integrator.as_deref(), &pairs, Spelling::Keyword).map_err(value_error)?;
         Ok(kind.name().to_string())
+    }
+
+    /// The samples per pixel of each pass of a render with `integrator` (default: the scene's
+    /// own) and `options` (checked as `render` checks them): `spp_per_pass` when given, else the
+    /// engine's auto default for the method and this scene's image size
+    /// (`haze_engine::options::auto_spp_per_pass`), as `haze render` would use.
+    #[pyo3(signature = (integrator=None, **options))]
+    fn spp_per_pass(&self, integrator: Option<String>, options: Option<&Bound<'_, PyDict>>) -> PyResult<u32> {
+        let given = given(options)?;
+        let pairs: Vec<(&str, &str)> = given.iter().map(|(n, v)| (n.as_str(), v.as_str())).collect();
+        let (kind, options) =
+            prepare(&self.inner, integrator.as_deref(), &pairs, Spelling::Keyword).map_err(value_error)?;
+        Ok(options.spp_per_pass_for(kind, &self.inner))
     }
 
     fn __repr__(&self) -> String {
