@@ -15,9 +15,9 @@
 //! A spot light's `E` is zero outside its cone, so for a spot the distance is sampled only on the
 //! part of the segment inside the cone ([`spot_interval`]; the cone with half-angle below 90
 //! degrees is convex, so that part is one interval). The integrand vanishes elsewhere, so the
-//! estimate stays unbiased, and camera segments that miss the beam cost no shadow ray. On the
-//! spot-beam benchmark (a 10-degree cone) this was the largest source of the many-light methods'
-//! variance (docs/results.md, "Variance by source").
+//! estimate stays unbiased, and camera segments that miss the beam cost no shadow ray. With the
+//! whole segment as the interval, most samples of a narrow beam (the spot-beam benchmark's cone
+//! is 10 degrees) land where the spot does not shine and estimate zero.
 
 use crate::camera::{estimator_medium, CameraSegment};
 use crate::vrl::sampling::{equiangular_pdf, sample_equiangular};
