@@ -3,7 +3,7 @@
 //! first non-delta surface vertex, and the continuation from one gathering vertex through
 //! delta chains (caustics into gathering vertices).
 //!
-//! The path-space table of §2.1 says which connection makes which path; this file makes the
+//! The path-space table of docs/theory.md §2.1 says which connection makes which path; this file makes the
 //! camera half of each row: emitters hit by a gathering chain (counted fully), next-event
 //! estimation on gathering segments (`single.rs`) and at gathering points
 //! (`haze_render::integrators::surface_nee`, no MIS), and the caller's virtual-light sums.
@@ -67,7 +67,7 @@ enum ChainEnd {
     Surface(SurfaceInteraction),
 }
 
-/// The radiance along `ray` (from `medium`) of every path in §2.1's table, split by component.
+/// The radiance along `ray` (from `medium`) of every path in the table of docs/theory.md §2.1, split by component.
 pub(crate) fn whole_path_radiance(
     scene: &Scene,
     mut ray: Ray,

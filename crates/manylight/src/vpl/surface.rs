@@ -50,7 +50,7 @@ impl SurfaceVpl {
 /// `intensity(n)` its intensity along the unit propagation direction `n`. `u` picks the camera
 /// distance equiangularly from `p` (`p(u) = h / (Theta w^2)`), so the estimate is
 /// `I Tr f_c sigma_s_c T_c(u) * Theta / h` (T12c), with `1/w^2` replaced by `min(1/w^2, c)`
-/// under `geometry_clamp = Some(c)` (biased). `h` is floored at `1e-6 s` as in §5.
+/// under `geometry_clamp = Some(c)` (biased). `h` is floored at `1e-6 s` as in docs/theory.md §5.
 pub fn sample_point_light_to_segment(
     cam: &Segment,
     cam_medium: &VrlMedium,

@@ -16,7 +16,7 @@ use haze_core::{Rgb, Vec3};
 /// One sample of the contribution of `vrl` to the surface point `x`: `u` picks `v` on the VRL
 /// equiangularly from `x`, so `1/(w^2 p(v)) = Theta / h` (T9) and the estimate is
 /// `Phi(v) sigma_s_l f_l Tr R * Theta / h` (T12b), with `h` floored at `1e-6` of the VRL's
-/// length as in §4.1. `connect(y, x)` is the transmittance times visibility.
+/// length as in docs/theory.md §4.1. `connect(y, x)` is the transmittance times visibility.
 pub fn sample_vrl_to_point(
     x: Vec3,
     receiver: impl Fn(Vec3) -> Rgb,
