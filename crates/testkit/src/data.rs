@@ -40,14 +40,31 @@ pub fn peers_dir() -> Option<PathBuf> {
 
 static SKIP_LINE: Once = Once::new();
 
-/// The peer directory, or `None` after printing (once per test binary) the line saying what is
-/// skipped and how to get the data. Tests of peer scenes start with
+/// True for the first test binary of this `cargo test` run that asks (see [`peers_or_skip`]).
+fn first_in_this_run() -> bool {
+    #[cfg(unix)]
+    {
+        let marker =
+            std::env::temp_dir().join(format!("haze-peers-skipped-{}", std::os::unix::process::parent_id()));
+        std::fs::OpenOptions::new().write(true).create_new(true).open(marker).is_ok()
+    }
+    #[cfg(not(unix))]
+    true
+}
+
+/// The peer directory, or `None` after printing the line saying what is skipped and how to get
+/// the data: once per `cargo test` run, whichever test binaries need the peers (a marker file
+/// named after the parent process, cargo, that the test binaries share; on other platforms
+/// once per test binary). Tests of peer scenes start with
 /// `let Some(peers) = haze_testkit::data::peers_or_skip() else { return };`.
 pub fn peers_or_skip() -> Option<PathBuf> {
     let dir = peers_dir();
     if dir.is_none() {
         // Straight to stderr: the test harness captures `eprintln!` of passing tests.
         SKIP_LINE.call_once(|| {
+            if !first_in_this_run() {
+                return;
+            }
             let _ = writeln!(
                 std::io::stderr(),
                 "skipped: peer scenes (Mitsuba 3 media render tests, tof-cbox-volumetric, \
