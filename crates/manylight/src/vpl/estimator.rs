@@ -59,21 +59,34 @@ pub fn sample_vpl_contribution(
     if cam.len.is_nan() || cam.len <= 0.0 || (vpl.flux * cam_medium.sigma_s).is_black() {
         return Rgb::ZERO;
     }
-    let c = cam.d.as_dvec3();
-    let r = (vpl.p - cam.o).as_dvec3();
-    let foot = r.dot(c);
-    let Some(eq) = Equiangular::new(foot, (r - foot * c).length(), 0.0, cam.len as f64) else {
+    let Some((uc, g_over_pdf)) = sample_distance_towards(cam, vpl.p, u, geometry_clamp) else {
         return Rgb::ZERO;
     };
+    terms_without_geometry(cam, cam_medium, vpl, vpl_phase, uc, cam.at(uc), connect) * g_over_pdf
+}
+
+/// Samples the camera distance `u` towards the point `p` equiangularly (Kulla & Fajardo 2012)
+/// and returns it with the geometry term over its pdf, `G(w) / p(u) = Theta / h * min(1, c w^2)`
+/// (`w^2 = h^2 + (u - foot)^2`, `c` the optional clamp). `None` where the equiangular
+/// distribution does not exist (a degenerate segment). Shared by every point-light-to-segment
+/// estimator.
+pub(crate) fn sample_distance_towards(
+    cam: &Segment,
+    p: Vec3,
+    u: f32,
+    geometry_clamp: Option<f32>,
+) -> Option<(f32, f32)> {
+    let c = cam.d.as_dvec3();
+    let r = (p - cam.o).as_dvec3();
+    let foot = r.dot(c);
+    let eq = Equiangular::new(foot, (r - foot * c).length(), 0.0, cam.len as f64)?;
     let t = eq.sample(u as f64);
-    // G(w) / p(u) = Theta / h * min(1, c w^2), with w^2 = h^2 + (t - foot)^2.
     let mut g_over_pdf = eq.span / eq.h;
     if let Some(clamp) = geometry_clamp {
         let w2 = eq.h * eq.h + (t - foot) * (t - foot);
         g_over_pdf *= (clamp as f64 * w2).min(1.0);
     }
-    let uc = (t as f32).min(cam.len);
-    terms_without_geometry(cam, cam_medium, vpl, vpl_phase, uc, cam.at(uc), connect) * g_over_pdf as f32
+    Some(((t as f32).min(cam.len), g_over_pdf as f32))
 }
 
 /// The integrand of the contribution (module docs) at camera distance `u`, same conventions as

@@ -7,7 +7,6 @@
 //! ```
 
 use crate::vrl::estimator::connection_direction;
-use crate::vrl::sampling::Equiangular;
 use crate::vrl::{Segment, VrlMedium};
 use glam::Vec2;
 use haze_core::{Frame, Rgb, Vec3};
@@ -63,20 +62,10 @@ pub fn sample_point_light_to_segment(
     if cam.len.is_nan() || cam.len <= 0.0 || cam_medium.sigma_s.is_black() {
         return Rgb::ZERO;
     }
-    let c = cam.d.as_dvec3();
-    let r = (p - cam.o).as_dvec3();
-    let foot = r.dot(c);
-    let Some(eq) = Equiangular::new(foot, (r - foot * c).length(), 0.0, cam.len as f64) else {
+    let Some((uc, g_over_pdf)) = super::estimator::sample_distance_towards(cam, p, u, geometry_clamp) else {
         return Rgb::ZERO;
     };
-    let t = eq.sample(u as f64);
-    let mut g_over_pdf = eq.span / eq.h;
-    if let Some(clamp) = geometry_clamp {
-        let w2 = eq.h * eq.h + (t - foot) * (t - foot);
-        g_over_pdf *= (clamp as f64 * w2).min(1.0);
-    }
-    let uc = (t as f32).min(cam.len);
-    terms_without_geometry(cam, cam_medium, p, &intensity, uc, connect) * g_over_pdf as f32
+    terms_without_geometry(cam, cam_medium, p, &intensity, uc, connect) * g_over_pdf
 }
 
 /// The integrand of [`sample_point_light_to_segment`] at `u` (zero outside the segment); for
