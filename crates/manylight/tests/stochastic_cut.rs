@@ -85,7 +85,7 @@ fn cut_partitions_lights_and_probabilities_sum_to_one() {
         let tree = tree_of(&vrls, trial % 4 == 3, trial as u64);
         for k in 0..6 {
             let seg = random_segment(&mut s, k);
-            let ctx = ImportanceContext::new(seg, &MEDIUM, MEDIUM.sigma_t);
+            let ctx = ImportanceContext::new(seg, &MEDIUM);
             let importance = |node: &SampleNode| ctx.importance(node);
             for cut_size in [1u32, 4, 16, 5000] {
                 let mut scratch = StochasticScratch::default();
@@ -122,7 +122,7 @@ fn descent_matches_its_probabilities() {
         let vrls = random_vrls(200, 100 + trial);
         let tree = tree_of(&vrls, trial % 2 == 1, trial);
         let seg = random_segment(&mut s, trial as usize);
-        let ctx = ImportanceContext::new(seg, &MEDIUM, MEDIUM.sigma_t);
+        let ctx = ImportanceContext::new(seg, &MEDIUM);
         let importance = |node: &SampleNode| ctx.importance(node);
         let start = 0;
         let probs = light_probabilities(&tree, start, &importance, 0.1);
@@ -168,7 +168,7 @@ fn estimates(
         sample_vrl_contribution(seg, &MEDIUM, &vrls[l as usize], &MEDIUM, uniforms(l), connect).mean() as f64
     };
     let brute: f64 = (0..vrls.len() as u32).map(contribution).sum();
-    let ctx = ImportanceContext::new(*seg, &MEDIUM, MEDIUM.sigma_t);
+    let ctx = ImportanceContext::new(*seg, &MEDIUM);
     let importance = |node: &SampleNode| ctx.importance(node);
     let mut scratch = StochasticScratch::default();
     let mut est = 0.0f64;

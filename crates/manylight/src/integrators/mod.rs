@@ -7,6 +7,7 @@ mod lightcuts;
 mod vpl;
 mod vrl;
 
+pub use lightcuts::probe as selection_probe;
 pub use lightcuts::{
     Builder, ClusterKind, CutSizeProbe, CutStrategy, LightcutPass, LightcutSettings, LightcutsIntegrator,
     Vpls, Vrls,

@@ -11,6 +11,7 @@
 //! power sampling (`surface.rs`), not by the trees.
 
 mod kinds;
+pub mod probe;
 mod surface;
 
 pub use kinds::{ClusterKind, Vpls, Vrls};
@@ -402,7 +403,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         let cam_medium = &pass.media[cs.medium as usize];
         let (value, stats) = match self.settings.strategy {
             CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
-                let ctx = ImportanceContext::new(cs.seg, cam_medium, pass.sigma_t_min);
+                let ctx = ImportanceContext::new(cs.seg, cam_medium);
                 let importance = |n: &SampleNode| ctx.importance(n);
                 let mut sum = Rgb::ZERO;
                 let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
@@ -417,6 +418,10 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                         sum += K::contribution(scene, cs, &pass.media, l, key, light) * (1.0 / prob);
                     },
                 );
+                if probe::probed(key) {
+                    let share = self.settings.stochastic.power_share;
+                    probe::record::<K>(scene, pass, cs, key, forest, &ctx, share);
+                }
                 if PROBING.get() {
                     let (mut total, mut largest) = (0.0f64, 0.0f64);
                     for &n in scratch.cut() {

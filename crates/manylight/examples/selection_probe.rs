@@ -1,0 +1,96 @@
+//! How much variance the stochastic cut's light selection adds, per scene (docs/lightcuts.md,
+//! "Choosing the importance"; `haze_manylight::integrators::selection_probe`).
+//!
+//! ```text
+//! cargo run --release -p haze-manylight --example selection_probe -- SCENE.xml... \
+//!     [--vrls 1000] [--every 150] [--width 96] [--spp 2]
+//! ```
+//!
+//! Renders each scene with `vrl_lightcuts` (k = 1, `--vrls` per pass, one spp per pass) at
+//! `--width` pixels across (height from the scene's aspect), probes one camera segment in
+//! `--every`, and prints one table row per scene: the relative variance `V` of one sampled light
+//! for the tree's descent, for power-proportional and for leaf-importance-proportional
+//! probabilities, averaged over the probed segments weighted by their squared sum (the share of
+//! the image's variance), and its median.
+
+use haze_manylight::integrators::selection_probe::{
+    set_selection_probe, take_selection_records, SelectionRecord,
+};
+use haze_manylight::integrators::{
+    LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, Vrls,
+};
+use haze_manylight::lighttrace::LightTraceSettings;
+use haze_render::progressive::{render, RenderSettings};
+use haze_scene::{load_file, LoadOptions};
+use std::sync::atomic::AtomicBool;
+
+fn main() {
+    let (mut scenes, mut vrls, mut every, mut width, mut spp) = (Vec::new(), 1000u64, 150u64, 96u32, 2u32);
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        let mut value = |name: &str| -> u64 {
+            let v = args.next().unwrap_or_else(|| fail(&format!("{name} needs a value")));
+            v.parse().unwrap_or_else(|_| fail(&format!("{name}: not a positive integer: {v}")))
+        };
+        match a.as_str() {
+            "--vrls" => vrls = value("--vrls"),
+            "--every" => every = value("--every").max(1),
+            "--width" => width = value("--width").max(1) as u32,
+            "--spp" => spp = value("--spp").max(1) as u32,
+            _ if a.starts_with("--") => fail(&format!("unknown option {a}")),
+            _ => scenes.push(a),
+        }
+    }
+    if scenes.is_empty() {
+        fail("usage: selection_probe SCENE.xml... [--vrls N] [--every N] [--width W] [--spp N]");
+    }
+    println!("| scene | segments | tree (k = 1) | power only | leaves | tree, median |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for path in scenes {
+        let mut scene = load_file(std::path::Path::new(&path), &LoadOptions::default())
+            .unwrap_or_else(|e| fail(&format!("{e}")));
+        let aspect = scene.camera.height as f32 / scene.camera.width as f32;
+        scene.camera.width = width;
+        scene.camera.height = ((width as f32 * aspect).round() as u32).max(1);
+        let ml = ManyLightSettings {
+            budget: LightBudget::Vrls(vrls),
+            trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+        };
+        let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, LightcutSettings::default(), 0)
+            .unwrap_or_else(|e| fail(&format!("{path}: {e}")));
+        let settings = RenderSettings {
+            spp,
+            seed: 0,
+            spp_per_pass: 1,
+            components: false,
+            time_limit: None,
+            first_pass: 0,
+        };
+        set_selection_probe(every);
+        render(&scene, &integrator, &settings, &AtomicBool::new(false), |_| {});
+        set_selection_probe(0);
+        let records = take_selection_records();
+        let weighted = |f: fn(&SelectionRecord) -> f64| {
+            let w: f64 = records.iter().map(|r| r.sum * r.sum).sum();
+            records.iter().map(|r| f(r) * r.sum * r.sum).sum::<f64>() / w
+        };
+        let mut tree: Vec<f64> = records.iter().map(|r| r.tree).collect();
+        tree.sort_by(f64::total_cmp);
+        let median = tree.get(tree.len() / 2).copied().unwrap_or(f64::NAN);
+        let name = std::path::Path::new(&path).file_stem().map(|s| s.to_string_lossy().into_owned());
+        println!(
+            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            name.unwrap_or(path.clone()),
+            records.len(),
+            weighted(|r| r.tree),
+            weighted(|r| r.power),
+            weighted(|r| r.leaves),
+            median
+        );
+    }
+}
+
+fn fail(msg: &str) -> ! {
+    eprintln!("selection_probe: {msg}");
+    std::process::exit(2)
+}

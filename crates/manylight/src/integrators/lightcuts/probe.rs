@@ -1,0 +1,145 @@
+//! The selection-variance probe: how much variance the stochastic cut's choice of one light adds,
+//! per camera segment (docs/lightcuts.md, "Choosing the importance"; `examples/selection_probe.rs`).
+//!
+//! For a probed segment and tree, with `c_i` each light's mean contribution (over
+//! [`PROBE_SAMPLES`] joint samples) and `p_i` a selection probability, sampling one light and
+//! dividing by its probability has relative variance
+//!
+//! ```text
+//! V(p) = sum_i c_i^2 / p_i / (sum_i c_i)^2 - 1        (0 when p_i is proportional to c_i)
+//! ```
+//!
+//! reported for the tree's descent from the root (`k = 1`), for probabilities proportional to
+//! power alone, and for probabilities proportional to each leaf's own importance (the tree's
+//! structure taken out). Off unless [`set_selection_probe`] turned it on: then one atomic load
+//! per segment.
+
+use super::{ClusterKind, Forest, LightcutPass};
+use crate::camera::CameraSegment;
+use crate::tree::importance::ImportanceContext;
+use crate::tree::stochastic::{light_probabilities, SampleNode};
+use haze_core::rng::mix64;
+use haze_scene::Scene;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+/// Joint samples averaged per light for its mean contribution.
+pub const PROBE_SAMPLES: u64 = 16;
+
+static EVERY: AtomicU64 = AtomicU64::new(0);
+static RECORDS: Mutex<Vec<SelectionRecord>> = Mutex::new(Vec::new());
+
+/// One probed camera segment and tree.
+#[derive(Clone, Copy, Debug)]
+pub struct SelectionRecord {
+    pub lights: usize,
+    /// `sum_i c_i` (channels summed).
+    pub sum: f64,
+    /// `V` of the tree's descent from the root.
+    pub tree: f64,
+    /// `V` of `p_i` proportional to power.
+    pub power: f64,
+    /// `V` of `p_i` proportional to each leaf's importance.
+    pub leaves: f64,
+}
+
+/// Probe about one camera segment in `every` (by a hash of its key); 0 turns the probe off.
+pub fn set_selection_probe(every: u64) {
+    EVERY.store(every, Ordering::Relaxed);
+}
+
+/// The records so far, emptying the store.
+pub fn take_selection_records() -> Vec<SelectionRecord> {
+    std::mem::take(&mut *RECORDS.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
+/// Whether the segment with `key` is probed.
+#[inline]
+pub(super) fn probed(key: u64) -> bool {
+    let every = EVERY.load(Ordering::Relaxed);
+    every != 0 && mix64(key ^ 0x7072_6f62_6570_726f) % every == 0
+}
+
+/// `V(p)` of the module docs for unnormalised weights `w` (infinite if a contributing light
+/// has weight 0).
+fn relative_variance(c: &[f64], w: &[f64]) -> f64 {
+    let (sum, norm) = (c.iter().sum::<f64>(), w.iter().sum::<f64>());
+    let mut v = 0.0;
+    for (&ci, &wi) in c.iter().zip(w) {
+        if ci != 0.0 {
+            if wi <= 0.0 {
+                return f64::INFINITY;
+            }
+            v += ci * ci * norm / wi;
+        }
+    }
+    v / (sum * sum) - 1.0
+}
+
+pub(super) fn record<K: ClusterKind>(
+    scene: &Scene,
+    pass: &LightcutPass<K>,
+    cs: &CameraSegment,
+    key: u64,
+    forest: &Forest<K>,
+    ctx: &ImportanceContext,
+    share: f32,
+) {
+    let n = forest.lights.len();
+    let c: Vec<f64> = forest
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let total: f64 = (0..PROBE_SAMPLES)
+                .map(|m| {
+                    let v = K::contribution(scene, cs, &pass.media, l, mix64(key ^ (m + 1)), i as u32);
+                    (v[0] + v[1] + v[2]) as f64
+                })
+                .sum();
+            total / PROBE_SAMPLES as f64
+        })
+        .collect();
+    let sum: f64 = c.iter().sum();
+    if !(sum > 0.0 && sum.is_finite()) {
+        return;
+    }
+    let importance = |node: &SampleNode| ctx.importance(node);
+    let mut tree = vec![0.0; n];
+    for (light, p) in light_probabilities(&forest.sample, 0, &importance, share) {
+        tree[light as usize] = p;
+    }
+    let (mut leaves, mut power) = (vec![0.0; n], vec![0.0; n]);
+    let mut stack = vec![0u32];
+    while let Some(id) = stack.pop() {
+        let node = forest.sample.node(id);
+        if node.is_leaf() {
+            leaves[node.light() as usize] = ctx.importance(node) as f64;
+            power[node.light() as usize] = (node.power[0] + node.power[1] + node.power[2]) as f64;
+        } else {
+            stack.extend(node.children());
+        }
+    }
+    let r = SelectionRecord {
+        lights: n,
+        sum,
+        tree: relative_variance(&c, &tree),
+        power: relative_variance(&c, &power),
+        leaves: relative_variance(&c, &leaves),
+    };
+    RECORDS.lock().unwrap_or_else(|e| e.into_inner()).push(r);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::relative_variance;
+
+    /// Proportional probabilities add nothing; uniform ones over two lights 1 and 3 add
+    /// `(1/0.5 + 9/0.5) / 16 - 1 = 0.25`.
+    #[test]
+    fn relative_variance_of_simple_cases() {
+        assert!(relative_variance(&[1.0, 3.0], &[2.0, 6.0]).abs() < 1e-12);
+        assert!((relative_variance(&[1.0, 3.0], &[1.0, 1.0]) - 0.25).abs() < 1e-12);
+        assert!(relative_variance(&[1.0, 3.0], &[0.0, 1.0]).is_infinite());
+    }
+}
