@@ -404,7 +404,14 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         let (value, stats) = match self.settings.strategy {
             CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
                 let ctx = ImportanceContext::new(cs.seg, cam_medium);
-                let importance = |n: &SampleNode| ctx.importance(n);
+                // A leaf's importance from its light's own shape (`ClusterKind::leaf_importance`).
+                let importance = |n: &SampleNode| {
+                    if n.is_leaf() {
+                        K::leaf_importance(&ctx, n, &forest.lights[n.light() as usize])
+                    } else {
+                        ctx.importance(n)
+                    }
+                };
                 let mut sum = Rgb::ZERO;
                 let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
                 let size = stochastic_cut(
@@ -420,7 +427,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                 );
                 if probe::probed(key) {
                     let share = self.settings.stochastic.power_share;
-                    probe::record::<K>(scene, pass, cs, key, forest, &ctx, share);
+                    probe::record::<K>(scene, pass, cs, key, forest, &importance, share);
                 }
                 if PROBING.get() {
                     let (mut total, mut largest) = (0.0f64, 0.0f64);
