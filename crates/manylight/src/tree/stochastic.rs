@@ -35,6 +35,9 @@ pub struct StochasticSettings {
     pub cut_size: u32,
     /// Share `a` of the child probability given by power alone (module docs), in `(0, 1]`.
     pub power_share: f32,
+    /// Joint samples of each sampled light (`--light-samples`), averaged (not used by the
+    /// traversal itself; the integrator evaluates them).
+    pub light_samples: u32,
 }
 
 impl Default for StochasticSettings {
@@ -42,7 +45,7 @@ impl Default for StochasticSettings {
     /// 2, 4 and 8 on the smoke room and the spot beam (docs/lightcuts.md, "Choosing the
     /// defaults"): more camera samples pay more than more lights per sample.
     fn default() -> Self {
-        StochasticSettings { cut_size: 1, power_share: 0.1 }
+        StochasticSettings { cut_size: 1, power_share: 0.1, light_samples: 1 }
     }
 }
 
