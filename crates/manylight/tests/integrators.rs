@@ -279,29 +279,7 @@ fn glass_ball_room_whole_image_matches_volpath() {
     let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml"));
     (scene.camera.width, scene.camera.height) = (16, 12);
     let (paths, passes) = (20, 40);
-    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
-    let vrl =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
-    let vpl = render_passes(
-        &scene,
-        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
-        passes,
-        1,
-        2,
-    );
-    let (vrl_lc, vpl_lc) = lightcut_renders(&scene, paths, passes);
-    let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
-    {
-        for comp in Component::ALL {
-            let (r, mean_z) = compare(f, &reference, comp);
-            println!("{method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
-            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
-                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let reference = check_many_light_against_volpath(&scene, "", paths, passes);
     let mut wrong = VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap();
     wrong.gather_point_scale = 0.0;
     let wrong = render_passes(&scene, &wrong, 2 * passes, 1, 1);
@@ -324,30 +302,39 @@ fn peer_cbox_whole_image_matches_volpath() {
     let mut scene =
         load_file(&dir.join("tof-cbox-volumetric/small.xml"), &options).expect("peer scene loads");
     (scene.camera.width, scene.camera.height) = (16, 16);
-    let (paths, passes) = (20, 40);
-    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
+    check_many_light_against_volpath(&scene, "cbox ", 20, 40);
+}
+
+/// Renders `scene` with `volpath` (the reference, 16 passes of 256 spp) and with `vrl`, `vpl`,
+/// `vrl_lightcuts` and `vpl_lightcuts` (`passes` passes of 1 spp, `paths` light paths each),
+/// and checks every component of each against the reference: at most 1% of the pixels fail
+/// the per-pixel z-test and the per-pass image mean is within 5 standard errors. Prints a line
+/// per method and component (starting with `label`); returns the reference.
+fn check_many_light_against_volpath(scene: &Scene, label: &str, paths: u64, passes: u32) -> Passes {
+    let reference = render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
     let vrl =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
+        render_passes(scene, &VrlIntegrator::new(scene, settings(scene, paths), 1).unwrap(), passes, 1, 1);
     let vpl = render_passes(
-        &scene,
-        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
+        scene,
+        &VplIntegrator::new(scene, settings(scene, paths), 2, None).unwrap(),
         passes,
         1,
         2,
     );
-    let (vrl_lc, vpl_lc) = lightcut_renders(&scene, paths, passes);
+    let (vrl_lc, vpl_lc) = lightcut_renders(scene, paths, passes);
     let mut failures = Vec::new();
     for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
     {
         for comp in Component::ALL {
             let (r, mean_z) = compare(f, &reference, comp);
-            println!("cbox {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
+            println!("{label}{method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
             if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
                 failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
             }
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+    reference
 }
 
 /// `vrl_lightcuts` and `vpl_lightcuts` with the default settings (stochastic cut of one node;

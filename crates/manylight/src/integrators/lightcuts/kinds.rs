@@ -4,12 +4,12 @@
 use super::Forest;
 use crate::camera::CameraSegment;
 use crate::gather::GatherPoint;
-use crate::integrators::{connect, light_uniforms};
+use crate::integrators::{connect, light_uniforms, medium_vpl_to_point};
 use crate::lighttrace::{LightSet, VplRecord, VrlRecord};
 use crate::tree::bound::{BoundContext, BoundKind};
 use crate::tree::cone::{node_cones, node_dir_cones};
 use crate::tree::lights::LightSummary;
-use crate::vpl::{point_light_to_point, sample_vpl_contribution, Vpl};
+use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::surface::sample_vrl_to_point;
 use crate::vrl::{sample_vrl_contribution, Vrl, VrlMedium};
 use haze_core::Rgb;
@@ -129,14 +129,6 @@ impl ClusterKind for Vpls {
         )
     }
     fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vpl: &Vpl, _u: f32) -> Rgb {
-        let phase = &media[vpl.medium as usize].phase;
-        point_light_to_point(
-            gp.p,
-            |d| gp.reflectance(d),
-            vpl.p,
-            |n| vpl.flux * phase.eval(vpl.d_in, n),
-            None,
-            |y, x| connect(scene, vpl.medium, y, x),
-        )
+        medium_vpl_to_point(scene, vpl, gp, media, None)
     }
 }

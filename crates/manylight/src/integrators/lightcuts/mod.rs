@@ -17,8 +17,8 @@ mod surface;
 pub use kinds::{ClusterKind, Vpls, Vrls};
 
 use super::{
-    connect_surface, light_uniforms, media, paths_per_pass, surface_vpls, ManyLightSettings,
-    SURFACE_VPL_STREAM,
+    light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment, surface_vpls,
+    ManyLightSettings,
 };
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
@@ -33,7 +33,7 @@ use crate::tree::stochastic::{
     stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
 };
 use crate::tree::{LightTree, Node};
-use crate::vpl::{point_light_to_point, sample_point_light_to_segment, SurfaceVpl};
+use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
@@ -477,19 +477,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
             &pass.surface_sampler,
             k,
             |j| light_uniforms(key ^ POWER_STREAM, j as u32).x,
-            |i| {
-                let vpl = &pass.surface_vpls[i];
-                let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-                sample_point_light_to_segment(
-                    &cs.seg,
-                    cam_medium,
-                    vpl.p,
-                    |w| vpl.intensity(bsdf, w),
-                    light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
-                    None,
-                    |_, x| connect_surface(scene, vpl, x),
-                )
-            },
+            |i| surface_vpl_to_segment(scene, &pass.surface_vpls[i], i, cs, cam_medium, key, None),
         );
         [cuts[0], cuts[1] + surface]
     }
@@ -509,16 +497,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
                 } else if i < n0 + n1 {
                     K::to_point(scene, gp, &pass.media, &pass.forests[1].lights[i - n0], u)
                 } else {
-                    let vpl = &pass.surface_vpls[i - n0 - n1];
-                    let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-                    point_light_to_point(
-                        gp.p,
-                        |d| gp.reflectance(d),
-                        vpl.p,
-                        |w| vpl.intensity(bsdf, w),
-                        None,
-                        |_, x| connect_surface(scene, vpl, x),
-                    )
+                    surface_vpl_to_point(scene, &pass.surface_vpls[i - n0 - n1], gp, None)
                 }
             },
         )
