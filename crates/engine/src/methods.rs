@@ -1,29 +1,18 @@
 //! The rendering methods of `haze render --integrator` and `haze compare --method`: one place
 //! that turns a method and its options (`crate::options`) into an integrator and renders with it.
 
+pub use crate::options::MethodOptions;
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{
-    CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
-    VplIntegrator, Vpls, VrlIntegrator, Vrls,
+    CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator,
+    Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
 use haze_render::{Integrator, VolPath};
 use haze_scene::Scene;
 use std::sync::atomic::AtomicBool;
-
-/// Options of the many-light methods (volpath has none). Front ends make them with
-/// [`crate::options::resolve`], which owns their defaults and checks.
-#[derive(Clone, Debug)]
-pub struct MethodOptions {
-    pub budget: LightBudget,
-    /// vpl only: clamp of the geometry term (biased).
-    pub vpl_clamp: Option<f32>,
-    /// vrl and vpl: clamp of the `1/d^2` of surface connections (biased).
-    pub clamp: Option<f32>,
-    pub lightcuts: LightcutSettings,
-}
 
 /// The method `name` names for `scene` (`None`: the scene's own `<integrator>`). `path` is
 /// volpath for scenes without media (Mitsuba 3's `path` ignores media).

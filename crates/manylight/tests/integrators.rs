@@ -115,36 +115,46 @@ fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
     }
 }
 
-fn check_against_volpath(name: &str, paths: u64, passes: u32) {
-    let scene = load_small(name);
-    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
+/// Renders `scene` with `volpath` (the reference, 16 passes of 256 spp), `vrl`, `vpl` and, with
+/// `lightcuts`, `vrl_lightcuts` and `vpl_lightcuts` (`passes` passes of 1 spp, `paths` light
+/// paths each), and checks every component of each against the reference with `judge` (at most
+/// 1% of the channel-pixels failing the z-test); its lines start with `label`. Returns the
+/// reference.
+fn check_against_volpath(scene: &Scene, label: &str, paths: u64, passes: u32, lightcuts: bool) -> Passes {
+    let reference = render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
     let vrl =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
+        render_passes(scene, &VrlIntegrator::new(scene, settings(scene, paths), 1).unwrap(), passes, 1, 1);
     let vpl = render_passes(
-        &scene,
-        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
+        scene,
+        &VplIntegrator::new(scene, settings(scene, paths), 2, None).unwrap(),
         passes,
         1,
         2,
     );
+    let mut methods = vec![("vrl", vrl), ("vpl", vpl)];
+    if lightcuts {
+        let (vrl_lc, vpl_lc) = lightcut_renders(scene, paths, passes);
+        methods.extend([("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]);
+    }
     let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+    for (method, f) in &methods {
         for comp in Component::ALL {
             let (r, mean_z) = compare(f, &reference, comp);
-            judge(&mut failures, &format!("{name} {method} {}", comp.name()), &r, mean_z, 0.01);
+            judge(&mut failures, &format!("{label}{method} {}", comp.name()), &r, mean_z, 0.01);
         }
     }
-    assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
+    assert!(failures.is_empty(), "{label}\n{}", failures.join("\n"));
+    reference
 }
 
 #[test]
 fn foggy_room_components_match_volpath() {
-    check_against_volpath("foggy-room", 150, 96);
+    check_against_volpath(&load_small("foggy-room"), "foggy-room ", 150, 96, false);
 }
 
 #[test]
 fn hg_box_components_match_volpath() {
-    check_against_volpath("hg-box", 150, 96);
+    check_against_volpath(&load_small("hg-box"), "hg-box ", 150, 96, false);
 }
 
 /// Doubling the number of light paths per pass leaves the expected image unchanged: the image
@@ -279,7 +289,7 @@ fn glass_ball_room_whole_image_matches_volpath() {
     let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml"));
     (scene.camera.width, scene.camera.height) = (16, 12);
     let (paths, passes) = (20, 40);
-    let reference = check_many_light_against_volpath(&scene, "", paths, passes);
+    let reference = check_against_volpath(&scene, "", paths, passes, true);
     let mut wrong = VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap();
     wrong.gather_point_scale = 0.0;
     let wrong = render_passes(&scene, &wrong, 2 * passes, 1, 1);
@@ -302,39 +312,7 @@ fn peer_cbox_whole_image_matches_volpath() {
     let mut scene =
         load_file(&dir.join("tof-cbox-volumetric/small.xml"), &options).expect("peer scene loads");
     (scene.camera.width, scene.camera.height) = (16, 16);
-    check_many_light_against_volpath(&scene, "cbox ", 20, 40);
-}
-
-/// Renders `scene` with `volpath` (the reference, 16 passes of 256 spp) and with `vrl`, `vpl`,
-/// `vrl_lightcuts` and `vpl_lightcuts` (`passes` passes of 1 spp, `paths` light paths each),
-/// and checks every component of each against the reference: at most 1% of the pixels fail
-/// the per-pixel z-test and the per-pass image mean is within 5 standard errors. Prints a line
-/// per method and component (starting with `label`); returns the reference.
-fn check_many_light_against_volpath(scene: &Scene, label: &str, paths: u64, passes: u32) -> Passes {
-    let reference = render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
-    let vrl =
-        render_passes(scene, &VrlIntegrator::new(scene, settings(scene, paths), 1).unwrap(), passes, 1, 1);
-    let vpl = render_passes(
-        scene,
-        &VplIntegrator::new(scene, settings(scene, paths), 2, None).unwrap(),
-        passes,
-        1,
-        2,
-    );
-    let (vrl_lc, vpl_lc) = lightcut_renders(scene, paths, passes);
-    let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
-    {
-        for comp in Component::ALL {
-            let (r, mean_z) = compare(f, &reference, comp);
-            println!("{label}{method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
-            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
-                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
-    reference
+    check_against_volpath(&scene, "cbox ", 20, 40, true);
 }
 
 /// `vrl_lightcuts` and `vpl_lightcuts` with the default settings (stochastic cut of one node;
