@@ -1,16 +1,21 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md: equal-time `haze compare` runs, several seeds each, on
-#   - the benchmark scenes (scenes/bench-*.xml) at RES x RES against long volpath references,
+#   - the benchmark scenes (scenes/bench-*.xml) at RES x RES against long references rendered by
+#     REF_METHOD (default the stochastic cut, `vrl_lightcuts` with 1000 VRLs: unbiased and z-tested
+#     against volpath and Mitsuba 3 in CI, and far less noisy per second than volpath on these
+#     scenes, whose volpath references' fireflies put a floor under every method's error;
+#     REF_METHOD=volpath gives the old references),
 #   - the validation scenes (tests/data/validation) against their Mitsuba 3 references,
 #   - the benchmark scenes at 640x360 (WIDE_*), where light tracing amortises over more pixels;
 # scripts/aggregate-results.py turns the runs of one scene into one table: median RMSE over the
 # seeds with its min-max, and RMSE ratios computed per seed (same run, same machine load).
 # Methods: volpath; brute-force vrl at two light counts; the paper's deterministic cut
-# (cut=bound) at two; the stochastic cut (the default) at two, and vpl_lightcuts. Camera
-# samples per pass: 1 for volpath (it batches passes anyway), brute-force vrl and the bound cut
-# (their cost per sample grows with the lights), SPP_PER_PASS (16) for the stochastic cut,
-# whose pass's light tracing and build are shared by the pass's samples (docs/lightcuts.md,
-# "Choosing the defaults"); the two groups run one after the other per seed. Raw tables and
+# (cut=bound) at two; the stochastic cut (the default) at two, with --light-samples 4, and
+# vpl_lightcuts. Camera samples per pass: 1 for volpath (it batches passes anyway), brute-force
+# vrl and the bound cut (their cost per sample grows with the lights), the auto default for the
+# stochastic cut (16 at 128x128, 1 at 640x360), whose pass's light tracing and build are shared
+# by the pass's samples (docs/lightcuts.md, "Choosing the defaults"); the two groups run one
+# after the other per seed. Raw tables and
 # images go to $OUT (not committed); HTML reports of seed 0 to $OUT/<scene>/report*/.
 #
 # Budgets come from the environment:
@@ -27,21 +32,22 @@ BUDGET=${BUDGET:-10}
 WIDE_BUDGET=${WIDE_BUDGET:-20}
 RES=${RES:-128}
 SEEDS=${SEEDS:-"0 1 2"}
-SPP_PER_PASS=${SPP_PER_PASS:-16}
+REF_METHOD=${REF_METHOD:-vrl_lightcuts}
 OUT=${OUT:-target/results}
 SCENES=${SCENES:-"smoke-room spot-beam fog-shadow"}
 PARTS=${PARTS:-"bench validation wide"}
-# Two groups per run, separated by "--": one sample per pass, then SPP_PER_PASS per pass.
+# Two groups per run, separated by "--": one sample per pass, then each method's auto samples per
+# pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
-  vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000)
+  vrl_lightcuts:1000 vrl_lightcuts:1000,light_samples=4 vrl_lightcuts:10000 vpl_lightcuts:10000)
 WIDE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000)
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
 DOC=docs/results.md
 
 # compare NAME SCENE REFERENCE BUDGET "DEFINES" METHOD... [-- METHOD...]: runs every seed into
-# $OUT/NAME (the methods before "--" with one sample per pass, those after it with
-# SPP_PER_PASS) and prints the aggregated table.
+# $OUT/NAME (the methods before "--" with one sample per pass, those after it with their auto
+# samples per pass) and prints the aggregated table.
 compare() {
   local name=$1 scene=$2 ref=$3 budget=$4 defines=$5
   shift 5
@@ -55,12 +61,12 @@ compare() {
     : > "$dir/seed-$seed.md"
     local g=0
     for methods in "${groups[@]}"; do
-      local spp=1 extra=()
-      [ "$g" -gt 0 ] && spp=$SPP_PER_PASS
+      local spp=(--spp-per-pass 1) extra=()
+      [ "$g" -gt 0 ] && spp=()
       if [ "$seed" = "$(echo $SEEDS | cut -d' ' -f1)" ]; then extra=(--report "$dir/report-$g"); fi
       # shellcheck disable=SC2086
       "$HAZE" compare "$scene" $defines --reference "$ref" --time "$budget" --seed "$seed" \
-        --spp-per-pass "$spp" $methods -o "$dir/images-$seed" "${extra[@]}" > "$dir/seed-$seed-$g.md"
+        "${spp[@]}" $methods -o "$dir/images-$seed" "${extra[@]}" > "$dir/seed-$seed-$g.md"
       # The first group's header, then every group's rows.
       if [ "$g" = 0 ]; then cat "$dir/seed-$seed-$g.md"; else tail -n +3 "$dir/seed-$seed-$g.md"; fi >> "$dir/seed-$seed.md"
       g=$((g + 1))
@@ -75,8 +81,13 @@ reference() { # reference SCENE OUT.exr SECONDS "DEFINES"
     echo "reusing $2" >&2
   else
     mkdir -p "$(dirname "$2")"
-    # shellcheck disable=SC2086
-    "$HAZE" reference "$1" $4 --time "$3" --seed 1000003 -o "$2" >&2
+    if [ "$REF_METHOD" = volpath ]; then
+      # shellcheck disable=SC2086
+      "$HAZE" reference "$1" $4 --time "$3" --seed 1000003 -o "$2" >&2
+    else
+      # shellcheck disable=SC2086
+      "$HAZE" render "$1" $4 --integrator "$REF_METHOD" --vrls 1000 --time "$3" --seed 1000003 -o "$2" >&2
+    fi
   fi
 }
 
@@ -87,10 +98,10 @@ load() { cut -d' ' -f1-3 /proc/loadavg; }
   echo
   echo "Regenerated by \`REUSE_REF=${REUSE_REF:-0} REF_TIME=$REF_TIME WIDE_REF_TIME=$WIDE_REF_TIME BUDGET=$BUDGET WIDE_BUDGET=$WIDE_BUDGET SEEDS=\"$SEEDS\" scripts/results.sh\`"
   echo "on $(date -u +%Y-%m-%d) ($(nproc) cores, $(uname -m)); do not edit by hand. Each method renders for the"
-  echo "budget in wall-clock seconds, light tracing and tree builds included (\`--spp-per-pass $SPP_PER_PASS\` for the stochastic cut, 1 for the others), once per"
+  echo "budget in wall-clock seconds, light tracing and tree builds included (the stochastic cut with its auto samples per pass, the others 1), once per"
   echo "seed ($SEEDS); the tables give the median over the seeds and its min-max, and ratios taken per"
   echo "seed (the methods of one seed run one after the other, under about the same machine load)."
-  echo "References: benchmark scenes volpath for $REF_TIME s (${WIDE_REF_TIME} s at 640x360, seed 1000003); validation"
+  echo "References: benchmark scenes \`$REF_METHOD\` (1000 VRLs if a many-light method) for $REF_TIME s (${WIDE_REF_TIME} s at 640x360, seed 1000003); validation"
   echo "scenes their Mitsuba 3 references (16384 spp). A reference's own noise adds to every method's"
   echo "MSE, so ratios near 1 are pulled towards 1."
   echo

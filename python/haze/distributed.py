@@ -146,6 +146,7 @@ def render(
     clamp: float | None = None,
     cut: str | None = None,
     cut_size: int | None = None,
+    light_samples: int | None = None,
     epsilon: float | None = None,
     max_cut: int | None = None,
     bound: str | None = None,
@@ -179,7 +180,7 @@ def render(
         scene_path: the scene file on the driver; it and every file it reads are shipped to
             the workers through the object store.
         integrator, spp, time, seed, spp_per_pass, components, vrls, light_paths, vpl_clamp,
-            clamp, cut, cut_size, epsilon, max_cut, bound, builder: as in :meth:`haze.Scene.render` (the engine's
+            clamp, cut, cut_size, light_samples, epsilon, max_cut, bound, builder: as in :meth:`haze.Scene.render` (the engine's
             options, :data:`haze.OPTIONS`).
         defaults: ``<default>`` overrides of the scene (``-D name=value``).
         address: Ray cluster address (``"auto"`` for a running cluster); used only if Ray is

@@ -519,6 +519,21 @@ pub const OPTIONS: &[OptionSpec] = &[
         get: |o| Some(o.method.lightcuts.stochastic.cut_size.to_string()),
     },
     OptionSpec {
+        name: "light_samples",
+        kind: Kind::Count { max: 64 },
+        default: Default::Value("1"),
+        help: "Joint samples of each light the stochastic cut samples, averaged: pays in dense, \
+               anisotropic media, where the joint sampling's own variance dominates (hg-box: 4), \
+               not elsewhere (docs/lightcuts.md).",
+        applies_to: MethodKind::LIGHTCUTS,
+        conflicts_with: &[],
+        requires: Some(("cut", "stochastic")),
+        scope: Scope::Method,
+        example: "4",
+        set: |o, v| o.method.lightcuts.stochastic.light_samples = v.int() as u32,
+        get: |o| Some(o.method.lightcuts.stochastic.light_samples.to_string()),
+    },
+    OptionSpec {
         name: "epsilon",
         kind: Kind::NonNegative,
         default: Default::Value("0.02"),
@@ -835,7 +850,10 @@ mod tests {
         }
         let o = resolve(VplLightcuts, &[("cut_size", "3")], Spelling::Keyword).unwrap();
         assert_eq!(o.method.lightcuts.stochastic.cut_size, 3);
-        assert_eq!(o.describe(VplLightcuts), "vrls=10000 cut=stochastic cut_size=3 builder=agglomerative");
+        assert_eq!(
+            o.describe(VplLightcuts),
+            "vrls=10000 cut=stochastic cut_size=3 light_samples=1 builder=agglomerative"
+        );
     }
 
     fn err(method: MethodKind, given: &[(&str, &str)], spelling: Spelling) -> String {

@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release -p haze-manylight --example selection_probe -- SCENE.xml... \
-//!     [--vrls 1000] [--every 150] [--width 96] [--spp 2]
+//!     [--vrls 1000] [--every 150] [--width 96] [--spp 2] [--share 0.1]
 //! ```
 //!
 //! Renders each scene with `vrl_lightcuts` (k = 1, `--vrls` per pass, one spp per pass) at
@@ -11,7 +11,7 @@
 //! `--every`, and prints one table row per scene: the relative variance `V` of one sampled light
 //! for the tree's descent, for power-proportional and for leaf-importance-proportional
 //! probabilities, averaged over the probed segments weighted by their squared sum (the share of
-//! the image's variance), and its median.
+//! the image's variance), and its median. `--share` sets the descent's power share `a`.
 
 use haze_manylight::integrators::selection_probe::{
     set_selection_probe, take_selection_records, SelectionRecord,
@@ -26,6 +26,7 @@ use std::sync::atomic::AtomicBool;
 
 fn main() {
     let (mut scenes, mut vrls, mut every, mut width, mut spp) = (Vec::new(), 1000u64, 150u64, 96u32, 2u32);
+    let mut settings = LightcutSettings::default();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = |name: &str| -> u64 {
@@ -37,15 +38,22 @@ fn main() {
             "--every" => every = value("--every").max(1),
             "--width" => width = value("--width").max(1) as u32,
             "--spp" => spp = value("--spp").max(1) as u32,
+            "--share" => {
+                let v = args.next().unwrap_or_else(|| fail("--share needs a value"));
+                settings.stochastic.power_share = match v.parse::<f32>() {
+                    Ok(a) if a > 0.0 && a <= 1.0 => a,
+                    _ => fail(&format!("--share: not in (0, 1]: {v}")),
+                };
+            }
             _ if a.starts_with("--") => fail(&format!("unknown option {a}")),
             _ => scenes.push(a),
         }
     }
     if scenes.is_empty() {
-        fail("usage: selection_probe SCENE.xml... [--vrls N] [--every N] [--width W] [--spp N]");
+        fail("usage: selection_probe SCENE.xml... [--vrls N] [--every N] [--width W] [--spp N] [--share A]");
     }
-    println!("| scene | segments | tree (k = 1) | power only | leaves | tree, median |");
-    println!("|---|---:|---:|---:|---:|---:|");
+    println!("| scene | segments | tree (k = 1) | power only | leaves | tree, median | joint, tree | joint, all lights |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     for path in scenes {
         let mut scene = load_file(std::path::Path::new(&path), &LoadOptions::default())
             .unwrap_or_else(|e| fail(&format!("{e}")));
@@ -56,7 +64,7 @@ fn main() {
             budget: LightBudget::Vrls(vrls),
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
-        let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, LightcutSettings::default(), 0)
+        let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, settings, 0)
             .unwrap_or_else(|e| fail(&format!("{path}: {e}")));
         let settings = RenderSettings {
             spp,
@@ -79,13 +87,15 @@ fn main() {
         let median = tree.get(tree.len() / 2).copied().unwrap_or(f64::NAN);
         let name = std::path::Path::new(&path).file_stem().map(|s| s.to_string_lossy().into_owned());
         println!(
-            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} |",
             name.unwrap_or(path.clone()),
             records.len(),
             weighted(|r| r.tree),
             weighted(|r| r.power),
             weighted(|r| r.leaves),
-            median
+            median,
+            weighted(|r| r.joint_tree),
+            weighted(|r| r.joint_all),
         );
     }
 }

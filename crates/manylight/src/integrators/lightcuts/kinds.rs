@@ -8,7 +8,9 @@ use crate::integrators::{connect, light_uniforms, medium_vpl_to_point};
 use crate::lighttrace::{LightSet, VplRecord, VrlRecord};
 use crate::tree::bound::{BoundContext, BoundKind};
 use crate::tree::cone::{node_cones, node_dir_cones};
+use crate::tree::importance::ImportanceContext;
 use crate::tree::lights::LightSummary;
+use crate::tree::stochastic::SampleNode;
 use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::surface::sample_vrl_to_point;
 use crate::vrl::{sample_vrl_contribution, Vrl, VrlMedium};
@@ -27,6 +29,11 @@ pub trait ClusterKind: Sized + Send + Sync + 'static {
     fn summary(light: &Self::Light, media: &[VrlMedium]) -> LightSummary;
     /// Per-node data the bound needs beyond the tree (the tight bound's cones).
     fn prepare(_forest: &mut Forest<Self>, _bound: BoundKind) {}
+    /// The stochastic cut's importance of a leaf `node` holding `light` (by default the node
+    /// formula; a kind may know its light's shape better).
+    fn leaf_importance(ctx: &ImportanceContext, node: &SampleNode, _light: &Self::Light) -> f32 {
+        ctx.importance(node)
+    }
     /// Upper bound of node `index`'s contribution (the deterministic cut).
     fn bound(ctx: &BoundContext, forest: &Forest<Self>, index: u32) -> f32;
     /// One sampled contribution of light `index` to camera segment `cs` (unbiased).
@@ -55,6 +62,9 @@ impl ClusterKind for Vrls {
     }
     fn summary(v: &Vrl, media: &[VrlMedium]) -> LightSummary {
         LightSummary::vrl(v, &media[v.medium as usize])
+    }
+    fn leaf_importance(ctx: &ImportanceContext, node: &SampleNode, v: &Vrl) -> f32 {
+        ctx.vrl_importance(v.seg.o, v.seg.d, v.seg.len, node.power)
     }
     fn prepare(f: &mut Forest<Self>, bound: BoundKind) {
         if bound == BoundKind::Tight {

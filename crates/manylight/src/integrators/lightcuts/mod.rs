@@ -404,8 +404,16 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         let (value, stats) = match self.settings.strategy {
             CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
                 let ctx = ImportanceContext::new(cs.seg, cam_medium);
-                let importance = |n: &SampleNode| ctx.importance(n);
+                // A leaf's importance from its light's own shape (`ClusterKind::leaf_importance`).
+                let importance = |n: &SampleNode| {
+                    if n.is_leaf() {
+                        K::leaf_importance(&ctx, n, &forest.lights[n.light() as usize])
+                    } else {
+                        ctx.importance(n)
+                    }
+                };
                 let mut sum = Rgb::ZERO;
+                let light_samples = self.settings.stochastic.light_samples;
                 let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
                 let size = stochastic_cut(
                     &forest.sample,
@@ -414,13 +422,25 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                     descent_key,
                     scratch,
                     |light, prob| {
+                        // `light_samples` joint samples of the chosen light, averaged: the
+                        // descent divides each light's joint-sampling variance by its
+                        // probability (docs/lightcuts.md, "Choosing the importance").
                         let l = &forest.lights[light as usize];
-                        sum += K::contribution(scene, cs, &pass.media, l, key, light) * (1.0 / prob);
+                        let m = light_samples.max(1);
+                        let weight = 1.0 / (prob * m as f32);
+                        for j in 0..m as u64 {
+                            let kj = if j == 0 {
+                                key
+                            } else {
+                                haze_core::rng::mix64(key ^ j.wrapping_mul(SAMPLE_STREAM))
+                            };
+                            sum += K::contribution(scene, cs, &pass.media, l, kj, light) * weight;
+                        }
                     },
                 );
                 if probe::probed(key) {
                     let share = self.settings.stochastic.power_share;
-                    probe::record::<K>(scene, pass, cs, key, forest, &ctx, share);
+                    probe::record::<K>(scene, pass, cs, key, forest, &importance, share);
                 }
                 if PROBING.get() {
                     let (mut total, mut largest) = (0.0f64, 0.0f64);
@@ -463,6 +483,9 @@ struct LightcutGather<'a, K: ClusterKind> {
     scene: &'a Scene,
     pass: &'a LightcutPass<K>,
 }
+
+/// Separates the numbers of a sampled light's further joint samples (`light_samples`).
+const SAMPLE_STREAM: u64 = 0x3c6e_f372_fe94_f82b;
 
 /// Separates the power-sampling numbers from the lights' own (`light_uniforms`).
 const POWER_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;

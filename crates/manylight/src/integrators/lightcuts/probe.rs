@@ -16,7 +16,6 @@
 
 use super::{ClusterKind, Forest, LightcutPass};
 use crate::camera::CameraSegment;
-use crate::tree::importance::ImportanceContext;
 use crate::tree::stochastic::{light_probabilities, SampleNode};
 use haze_core::rng::mix64;
 use haze_scene::Scene;
@@ -41,6 +40,11 @@ pub struct SelectionRecord {
     pub power: f64,
     /// `V` of `p_i` proportional to each leaf's importance.
     pub leaves: f64,
+    /// The joint sampling's own variance through the tree's descent,
+    /// `sum_i Var_i / p_i / (sum_i c_i)^2` (`Var_i` the variance of one sample of light `i`).
+    pub joint_tree: f64,
+    /// The same with every light evaluated (brute force): `sum_i Var_i / (sum_i c_i)^2`.
+    pub joint_all: f64,
 }
 
 /// Probe about one camera segment in `every` (by a hash of its key); 0 turns the probe off.
@@ -82,31 +86,34 @@ pub(super) fn record<K: ClusterKind>(
     cs: &CameraSegment,
     key: u64,
     forest: &Forest<K>,
-    ctx: &ImportanceContext,
+    importance: &impl Fn(&SampleNode) -> f32,
     share: f32,
 ) {
     let n = forest.lights.len();
-    let c: Vec<f64> = forest
+    // Mean and sample variance of each light's contribution over PROBE_SAMPLES joint samples.
+    let (c, var): (Vec<f64>, Vec<f64>) = forest
         .lights
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            let total: f64 = (0..PROBE_SAMPLES)
-                .map(|m| {
-                    let v = K::contribution(scene, cs, &pass.media, l, mix64(key ^ (m + 1)), i as u32);
-                    (v[0] + v[1] + v[2]) as f64
-                })
-                .sum();
-            total / PROBE_SAMPLES as f64
+            let (mut s1, mut s2) = (0.0, 0.0);
+            for m in 0..PROBE_SAMPLES {
+                let v = K::contribution(scene, cs, &pass.media, l, mix64(key ^ (m + 1)), i as u32);
+                let x = (v[0] + v[1] + v[2]) as f64;
+                s1 += x;
+                s2 += x * x;
+            }
+            let n = PROBE_SAMPLES as f64;
+            let mean = s1 / n;
+            (mean, ((s2 - n * mean * mean) / (n - 1.0)).max(0.0))
         })
-        .collect();
+        .unzip();
     let sum: f64 = c.iter().sum();
     if !(sum > 0.0 && sum.is_finite()) {
         return;
     }
-    let importance = |node: &SampleNode| ctx.importance(node);
     let mut tree = vec![0.0; n];
-    for (light, p) in light_probabilities(&forest.sample, 0, &importance, share) {
+    for (light, p) in light_probabilities(&forest.sample, 0, importance, share) {
         tree[light as usize] = p;
     }
     let (mut leaves, mut power) = (vec![0.0; n], vec![0.0; n]);
@@ -114,18 +121,22 @@ pub(super) fn record<K: ClusterKind>(
     while let Some(id) = stack.pop() {
         let node = forest.sample.node(id);
         if node.is_leaf() {
-            leaves[node.light() as usize] = ctx.importance(node) as f64;
+            leaves[node.light() as usize] = importance(node) as f64;
             power[node.light() as usize] = (node.power[0] + node.power[1] + node.power[2]) as f64;
         } else {
             stack.extend(node.children());
         }
     }
+    let joint_tree = var.iter().zip(&tree).map(|(&v, &p)| if v > 0.0 { v / p } else { 0.0 }).sum::<f64>();
+    let joint_all = var.iter().sum::<f64>();
     let r = SelectionRecord {
         lights: n,
         sum,
         tree: relative_variance(&c, &tree),
         power: relative_variance(&c, &power),
         leaves: relative_variance(&c, &leaves),
+        joint_tree: joint_tree / (sum * sum),
+        joint_all: joint_all / (sum * sum),
     };
     RECORDS.lock().unwrap_or_else(|e| e.into_inner()).push(r);
 }
