@@ -1,5 +1,6 @@
-//! Mitsuba 3 conformance on scenes we did not write (issue 8): the 8 homogeneous-media scenes of
-//! Mitsuba 3's render-test suite and two public Mitsuba 3 scenes, read from `$HAZE_PEERS_DIR` or
+//! Mitsuba 3 conformance on scenes we did not write (issue 8): the 8 homogeneous-media scenes and
+//! the 4 heterogeneous-media scenes (issue 15) of Mitsuba 3's render-test suite and two public
+//! Mitsuba 3 scenes, read from `$HAZE_PEERS_DIR` or
 //! `../shared/peers/` (never copied into the repository; `scripts/fetch-peers.sh` downloads
 //! them), rendered with haze's `volpath` and judged by `check.py`'s rule, reimplemented here;
 //! `load.rs` checks that they load as their READMEs describe. Every test that reads peer data
@@ -222,6 +223,26 @@ fn homo_roughdielectric_spot() {
 #[test]
 fn homo_spectral_sigmat() {
     suite("test_homo_spectral_sigmat_volpathmis");
+}
+
+#[test]
+fn hetero_sigmat() {
+    suite("test_hetero_sigmat_volpath");
+}
+
+#[test]
+fn hetero_sigmat_albedo() {
+    suite("test_hetero_sigmat_albedo_volpath");
+}
+
+#[test]
+fn hetero_spectral_sigmat_no_scattering() {
+    suite("test_hetero_spectral_sigmat_no_scattering_volpath");
+}
+
+#[test]
+fn hetero_spectral_sigmat() {
+    suite("test_hetero_spectral_sigmat_volpathmis");
 }
 
 #[test]
