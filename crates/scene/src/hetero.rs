@@ -1,6 +1,6 @@
 //! Heterogeneous media (Mitsuba 3 plugin `heterogeneous`): extinction and albedo from
 //! [`Volume`]s, a majorant grid walked by a DDA, free-flight sampling by delta tracking and
-//! transmittance by ratio tracking. Formulas and sources: `docs/media.md` §2-§4.
+//! transmittance by ratio tracking. Formulas and sources: `docs/theory.md` §12.1-12.4.
 //!
 //! Mitsuba 3's semantics that decide what is rendered (`src/media/heterogeneous.cpp`,
 //! `Medium::sample_interaction`): `sigma_t(x) = scale * sigma_t_volume(x)`,
@@ -34,7 +34,7 @@ pub struct Heterogeneous {
 }
 
 /// Piecewise-constant per-channel upper bounds of `sigma_t` over a regular grid of boxes
-/// covering the medium's bounding box (`docs/media.md` §3).
+/// covering the medium's bounding box (`docs/theory.md` §12.2, (T27)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MajorantGrid {
     pub lo: Vec3,
@@ -120,7 +120,7 @@ impl<'a> MajorantIter<'a> {
                 t1 = t1.min(a.max(b));
             }
         }
-        if !(t0 < t1) {
+        if t0.is_nan() || t1.is_nan() || t0 >= t1 {
             return it;
         }
         let p = o + d * t0;
@@ -185,7 +185,7 @@ impl Iterator for MajorantIter<'_> {
 }
 
 /// Outcome of delta tracking along a segment, in the path-level spectral MIS form of
-/// `haze_core::transmittance` (`docs/media.md` §4).
+/// `haze_core::transmittance` (`docs/theory.md` §12.3).
 #[derive(Clone, Copy, Debug)]
 pub enum Flight {
     /// A real collision at `t`: multiply the throughput by `weight` (it includes `sigma_s(x)`)
@@ -214,7 +214,7 @@ impl Heterogeneous {
     /// `sigma_t,h(x) / sigma_maj,h`, else null. Per channel the contributions are
     /// `T_maj sigma_s` (real), `T_maj sigma_n` (null), `T_maj` (pass), and the densities
     /// `T_maj sigma_t` (real), `T_maj sigma_n` (null), `T_maj` (pass), with
-    /// `sigma_n = sigma_maj - sigma_t` (`docs/media.md` §4, (M4)).
+    /// `sigma_n = sigma_maj - sigma_t` (`docs/theory.md` §12.3, (T28)).
     pub fn sample_free_flight(
         &self,
         o: Vec3,
@@ -243,7 +243,7 @@ impl Heterogeneous {
                     let p_real = (sigma_t[hero] / m).min(1.0);
                     if sampler.next_1d() < p_real {
                         let pdf = t_maj[hero] * sigma_t[hero];
-                        if !(pdf > 0.0) {
+                        if pdf.is_nan() || pdf <= 0.0 {
                             return Flight::Pass { weight: Rgb::ZERO, ratio: Rgb::ONE };
                         }
                         let sigma_s = sigma_t * self.albedo.eval(p);
@@ -255,7 +255,7 @@ impl Heterogeneous {
                     }
                     let sigma_n = (seg.sigma_maj - sigma_t).map(|x| x.max(0.0));
                     let pdf = t_maj[hero] * sigma_n[hero];
-                    if !(pdf > 0.0) {
+                    if pdf.is_nan() || pdf <= 0.0 {
                         return Flight::Pass { weight: Rgb::ZERO, ratio: Rgb::ONE };
                     }
                     acc *= t_maj * sigma_n / pdf;
@@ -265,7 +265,7 @@ impl Heterogeneous {
             t_maj *= seg.sigma_maj.exp_neg(seg.t1 - t);
         }
         let ph = t_maj[hero];
-        if !(ph > 0.0) {
+        if ph.is_nan() || ph <= 0.0 {
             return Flight::Pass { weight: Rgb::ZERO, ratio: Rgb::ONE };
         }
         let f = acc * t_maj / ph;
@@ -276,7 +276,7 @@ impl Heterogeneous {
     /// in participating media", Sec. 3.2): tentative collisions from the grey majorant
     /// `mu = max_c sigma_maj,c` of each cell, and the estimate
     /// `T = prod_i (1 - sigma_t(x_i) / mu)` per channel, unbiased for
-    /// `exp(-int_t0^t1 sigma_t)` (`docs/media.md` §4, (M5)); with Russian roulette once every
+    /// `exp(-int_t0^t1 sigma_t)` (`docs/theory.md` §12.4, (T29)); with Russian roulette once every
     /// channel is below 0.05.
     pub fn transmittance(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, sampler: &mut Sampler) -> Rgb {
         let mut tr = Rgb::ONE;

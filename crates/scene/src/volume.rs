@@ -3,7 +3,7 @@
 //!
 //! Semantics follow Mitsuba 3 (`src/volumes/grid.cpp`, `src/render/volume.cpp`,
 //! `include/mitsuba/render/volumegrid.h`, and Dr.Jit's `Texture::eval`), because scenes and
-//! references come from it (`docs/media.md` §1):
+//! references come from it (`docs/theory.md` §12.1):
 //! - a volume maps world points to its local unit cube by the inverse of `to_world`
 //!   (with `use_grid_bbox`, then by the file's bounding box to `[0, 1]^3`);
 //! - its bounding box is the world axis-aligned box of `to_world` applied to the unit cube;
@@ -72,7 +72,7 @@ pub const VOL_HEADER_BYTES: usize = 48;
 
 impl Grid {
     /// Reads a Mitsuba `.vol` file (format version 3, encoding 1 = float32, little endian;
-    /// `docs/media.md` §1 has the layout). Errors name the file and what is wrong.
+    /// `docs/mitsuba-compat.md` has the layout). Errors name the file and what is wrong.
     pub fn read_vol(path: &Path) -> Result<Grid, String> {
         let bytes = std::fs::read(path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
         Grid::parse_vol(&bytes).map_err(|m| format!("'{}': {m}", path.display()))
@@ -293,7 +293,7 @@ impl Volume {
     }
 }
 
-/// Dr.Jit's `tex_eval` on a grid at local point `u` (`docs/media.md` §1).
+/// Dr.Jit's `tex_eval` on a grid at local point `u` (`docs/theory.md` §12.1, (T25)).
 #[inline]
 fn eval_grid(grid: &Grid, filter: Filter, wrap: Wrap, u: Vec3) -> Rgb {
     let n = [grid.res[0] as i32, grid.res[1] as i32, grid.res[2] as i32];

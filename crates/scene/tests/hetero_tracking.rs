@@ -1,5 +1,5 @@
-//! Delta and ratio tracking in a heterogeneous medium against closed forms (`docs/media.md`
-//! §4): a grid whose density grows linearly along x (trilinear between cell centres, clamped
+//! Delta and ratio tracking in a heterogeneous medium against closed forms (`docs/theory.md`
+//! §12.3-12.4): a grid whose density grows linearly along x (trilinear between cell centres, clamped
 //! to the edge cells outside them), where the optical depth of any ray has a closed form.
 //! Negative controls: a majorant below the maximum density must fail both tests.
 
@@ -196,7 +196,7 @@ fn delta_tracking_distances_follow_the_free_flight_density() {
 
 /// Chromatic extinction, hero channel drawn per sample: the spectral-MIS estimates
 /// `weight / mean(ratio)` of passing and of a real collision (albedo 1) reproduce `T_c` and
-/// `1 - T_c` in every channel (`docs/media.md` §4).
+/// `1 - T_c` in every channel (`docs/theory.md` §12.3).
 #[test]
 fn spectral_mis_free_flight_estimates_each_channel() {
     let m = medium(MAJORANT_RES, 1.0, 1.0);

@@ -50,7 +50,7 @@ pub fn transmittance_to(
 }
 
 /// [`transmittance_to`] with the ratio-tracking estimates of heterogeneous segments
-/// (`docs/media.md` §4) drawn from `sampler`; homogeneous media draw nothing, so scenes
+/// (`docs/theory.md` §12.4) drawn from `sampler`; homogeneous media draw nothing, so scenes
 /// without heterogeneous media render bit for bit as with [`transmittance_to`].
 pub fn transmittance_to_sampled(
     scene: &Scene,

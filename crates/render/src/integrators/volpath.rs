@@ -1,7 +1,7 @@
 //! `volpath`: unbiased volumetric path tracing in homogeneous and heterogeneous media — the
 //! reference every many-light method in haze is checked against. Heterogeneous media are
 //! sampled by delta tracking and their transmittance estimated by ratio tracking, both against
-//! a majorant grid (`haze_scene::hetero`, `docs/media.md` §3-§4).
+//! a majorant grid (`haze_scene::hetero`, `docs/theory.md` §12.2-12.4).
 //!
 //! Follows Mitsuba 3's `volpath` in its observable conventions, because the validation
 //! references come from it:
@@ -103,7 +103,7 @@ impl Integrator for VolPath {
                         }
                         FreeFlight::Pass { weight, ratio } => Flight::Pass { weight, ratio },
                     },
-                    // Delta tracking against the majorant grid (`docs/media.md` §4).
+                    // Delta tracking against the majorant grid (`docs/theory.md` §12.3).
                     Some(h) => h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler),
                 };
                 match flight {
