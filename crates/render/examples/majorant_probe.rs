@@ -46,8 +46,12 @@ fn lookups_per_ray(h: &Heterogeneous) -> (f64, f64) {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let spp: u32 = args.iter().position(|a| a == "--spp").map_or(64, |i| args[i + 1].parse().unwrap());
-    let scenes: Vec<&String> =
-        args.iter().enumerate().filter(|(i, a)| a.ends_with(".xml") && (*i == 0 || args[i - 1] != "--spp")).map(|(_, a)| a).collect();
+    let scenes: Vec<&String> = args
+        .iter()
+        .enumerate()
+        .filter(|(i, a)| a.ends_with(".xml") && (*i == 0 || args[i - 1] != "--spp"))
+        .map(|(_, a)| a)
+        .collect();
     println!("| scene | majorant | mean int sigma_maj dt per chord | mean optical depth | volpath time at {spp} spp (s) | image mean |");
     println!("|---|---|---|---|---|---|");
     for path in scenes {

@@ -112,20 +112,21 @@ impl Grid {
             ));
         }
         let bbox = (Vec3::new(float(24), float(28), float(32)), Vec3::new(float(36), float(40), float(44)));
-        let count = (rx as u64) * (ry as u64) * (rz as u64) * channels as u64;
-        let expected = VOL_HEADER_BYTES as u64 + 4 * count;
-        if (bytes.len() as u64) < expected {
+        // In u128: four i32 factors cannot overflow it.
+        let count = (rx as u128) * (ry as u128) * (rz as u128) * channels as u128;
+        let expected = VOL_HEADER_BYTES as u128 + 4 * count;
+        if (bytes.len() as u128) < expected {
             return Err(format!(
                 "truncated .vol file: the header announces {rx} x {ry} x {rz} cells x {channels} channel(s) \
                  = {expected} bytes, the file has {}",
                 bytes.len()
             ));
         }
-        if (bytes.len() as u64) > expected {
+        if (bytes.len() as u128) > expected {
             return Err(format!(
                 "the .vol file has {} bytes after the {rx} x {ry} x {rz} x {channels} floats its header announces \
                  (wrong resolution or channel count in the header?)",
-                bytes.len() as u64 - expected
+                bytes.len() as u128 - expected
             ));
         }
         let data = bytes[VOL_HEADER_BYTES..]
@@ -449,6 +450,11 @@ mod tests {
         let mut enc = bytes.clone();
         enc[4] = 2;
         assert!(err(&enc).contains("encoding 2"));
+        let mut huge = bytes.clone();
+        for at in [8, 12, 16] {
+            huge[at..at + 4].copy_from_slice(&i32::MAX.to_le_bytes());
+        }
+        assert!(err(&huge).contains("truncated .vol file"));
         let mut res = bytes.clone();
         res[8..12].copy_from_slice(&0i32.to_le_bytes());
         assert!(err(&res).contains("resolution 0 x 2 x 1"));
