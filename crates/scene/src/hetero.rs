@@ -8,7 +8,7 @@
 //! of the `sigma_t` volume: outside it there is no extinction at all, even where the volume's
 //! wrap mode would give a value.
 
-use crate::volume::Volume;
+use crate::volume::{Volume, VolumeData};
 use glam::Vec3;
 use haze_core::{Rgb, Sampler};
 
@@ -71,6 +71,11 @@ impl MajorantGrid {
                     cells.push(sigma_t.max_over_box(a, b) * (scale * MAJORANT_MARGIN));
                 }
             }
+        }
+        // A grid whose cells all have the same bound (a noisy grid with its maximum everywhere)
+        // gains nothing from the DDA: one cell, no segment boundaries to cross.
+        if cells.iter().all(|c| *c == cells[0]) {
+            return MajorantGrid { lo, hi, res: [1; 3], cells: vec![cells[0]] };
         }
         MajorantGrid { lo, hi, res, cells }
     }
@@ -278,7 +283,14 @@ impl Heterogeneous {
     /// `T = prod_i (1 - sigma_t(x_i) / mu)` per channel, unbiased for
     /// `exp(-int_t0^t1 sigma_t)` (`docs/theory.md` §12.4, (T29)); with Russian roulette once every
     /// channel is below 0.05.
+    ///
+    /// A constant `sigma_t` (a `constvolume`) is homogeneous inside its box: there the exact
+    /// `exp(-sigma_t L)` over the length `L` inside the box, no random numbers.
     pub fn transmittance(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, sampler: &mut Sampler) -> Rgb {
+        if let VolumeData::Const(v) = self.sigma_t.data {
+            let len: f32 = self.majorants.segments(o, d, t0, t1).map(|g| g.t1 - g.t0).sum();
+            return (v * self.scale).exp_neg(len);
+        }
         let mut tr = Rgb::ONE;
         for seg in self.majorants.segments(o, d, t0, t1) {
             let mu = seg.sigma_maj.max_component();
@@ -325,7 +337,7 @@ impl Heterogeneous {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::{Filter, Grid, VolumeData, Wrap};
+    use crate::volume::{Filter, Grid, Wrap};
     use glam::Affine3A;
     use std::sync::Arc;
 
@@ -347,6 +359,29 @@ mod tests {
         );
         let majorants = MajorantGrid::build(&sigma_t, 3.0, [majorant_res; 3]);
         Heterogeneous { sigma_t, albedo: Volume::constant(Rgb::splat(0.5)), scale: 3.0, majorants }
+    }
+
+    /// A constant extinction gets the exact transmittance over the ray's length inside the box,
+    /// and a grid with the same bound everywhere one majorant cell.
+    #[test]
+    fn constant_extinction_is_exact_and_uniform_bounds_collapse() {
+        let sigma_t = Volume::new(
+            VolumeData::Const(Rgb::new(0.5, 0.4, 0.3)),
+            Affine3A::from_translation(Vec3::splat(-0.5)),
+        );
+        let majorants = MajorantGrid::build(&sigma_t, 5.0, [1; 3]);
+        let m = Heterogeneous { sigma_t, albedo: Volume::constant(Rgb::ZERO), scale: 5.0, majorants };
+        let mut s = Sampler::from_seed(1);
+        // From x = -2 along +x at y = z = 0: 1 unit inside [-0.5, 0.5]^3.
+        let tr = m.transmittance(Vec3::new(-2.0, 0.0, 0.0), Vec3::X, 0.0, 10.0, &mut s);
+        let want = Rgb::new(2.5, 2.0, 1.5).map(|x| (-x).exp());
+        for c in 0..3 {
+            assert!((tr[c] - want[c]).abs() < 1e-6, "{tr} vs {want}");
+        }
+        let flat = medium([4, 4, 4], |_, _, _| 0.7, MAJORANT_RES);
+        assert_eq!(flat.majorants.res, [1; 3]);
+        let ramp = medium([4, 4, 4], |x, _, _| x as f32, MAJORANT_RES);
+        assert_eq!(ramp.majorants.res, [MAJORANT_RES; 3]);
     }
 
     /// The DDA's segments tile the clipped ray interval without gaps, and every lookup on a

@@ -113,7 +113,8 @@ impl Integrator for VolPath {
                         r *= ratio;
                         depth += 1;
                         medium_events += 1;
-                        if depth >= max_depth {
+                        // A black throughput (albedo 0) has nothing left to estimate: no shadow ray.
+                        if depth >= max_depth || beta.is_black() {
                             break;
                         }
                         let class = Component::classify(medium_events, surface_events);
