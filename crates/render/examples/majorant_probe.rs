@@ -59,8 +59,10 @@ fn main() {
         let mut global = load_file(path.as_ref(), &LoadOptions::default()).unwrap();
         use_global_majorant(&mut global);
         let name = std::path::Path::new(path).file_stem().unwrap().to_string_lossy().to_string();
-        for (label, scene) in [("grid 16^3", &grid), ("global", &global)] {
+        for (label, scene) in [("grid", &grid), ("global", &global)] {
             let Some(h) = scene.media.iter().find_map(|m| m.hetero.clone()) else { continue };
+            let r = h.majorants.res;
+            let label = format!("{label} {}x{}x{}", r[0], r[1], r[2]);
             let (maj, tau) = lookups_per_ray(&h);
             let settings = RenderSettings { spp, seed: 0, spp_per_pass: spp, ..Default::default() };
             let out = render_volpath(scene, &settings);
