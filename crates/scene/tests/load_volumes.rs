@@ -129,6 +129,13 @@ fn grid_bbox_constvolume_and_plain_values() {
     assert_eq!(h.sigma_t.bbox, (Vec3::splat(-0.5), Vec3::splat(0.5)));
     assert_eq!(h.sigma_t(Vec3::splat(7.0)), Rgb::new(0.5, 0.4, 0.3));
     assert_eq!(h.albedo.bbox, (Vec3::ZERO, Vec3::ONE));
+    // The grid file is one of the scene's files (what distributed renders ship to workers).
+    let path = scene_file(
+        &d,
+        "<volume name=\"sigma_t\" type=\"gridvolume\"><string name=\"filename\" value=\"grid.vol\"/></volume>",
+    );
+    let (_, files) = haze_scene::load_file_with_sources(&path, &LoadOptions::default()).unwrap();
+    assert!(files.iter().any(|f| f.ends_with("grid.vol")), "{files:?}");
     let scene = load(&d, "<float name=\"sigma_t\" value=\"3\"/>").unwrap();
     let h = scene.media[0].hetero.clone().unwrap();
     assert_eq!(h.sigma_t.bbox, (Vec3::ZERO, Vec3::ONE));
