@@ -96,15 +96,20 @@ impl Integrator for VolPath {
 
             if let Some(mid) = medium {
                 let med = scene.medium(mid);
-                let flight = match &med.hetero {
-                    None => match sample_free_flight(med.sigma_t, t_surface, hero, sampler.next_1d()) {
-                        FreeFlight::Interaction { t, weight, ratio } => {
-                            Flight::Scatter { t, weight: weight * med.sigma_s(), ratio }
-                        }
-                        FreeFlight::Pass { weight, ratio } => Flight::Pass { weight, ratio },
-                    },
+                // Homogeneous: `sigma_s` multiplies after the depth check, as it always did (the
+                // same rounding); heterogeneous: the flight's weight already holds `sigma_s(x)`.
+                let (flight, sigma_s) = match &med.hetero {
+                    None => (
+                        match sample_free_flight(med.sigma_t, t_surface, hero, sampler.next_1d()) {
+                            FreeFlight::Interaction { t, weight, ratio } => {
+                                Flight::Scatter { t, weight, ratio }
+                            }
+                            FreeFlight::Pass { weight, ratio } => Flight::Pass { weight, ratio },
+                        },
+                        med.sigma_s(),
+                    ),
                     // Delta tracking against the majorant grid (`docs/theory.md` §12.3).
-                    Some(h) => h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler),
+                    Some(h) => (h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler), Rgb::ONE),
                 };
                 match flight {
                     Flight::Scatter { t, weight, ratio } => {
@@ -113,8 +118,12 @@ impl Integrator for VolPath {
                         r *= ratio;
                         depth += 1;
                         medium_events += 1;
+                        if depth >= max_depth {
+                            break;
+                        }
+                        beta *= sigma_s;
                         // A black throughput (albedo 0) has nothing left to estimate: no shadow ray.
-                        if depth >= max_depth || beta.is_black() {
+                        if beta.is_black() {
                             break;
                         }
                         let class = Component::classify(medium_events, surface_events);
