@@ -342,6 +342,17 @@ mod tests {
     use std::sync::Arc;
 
     fn medium(res: [u32; 3], f: impl Fn(u32, u32, u32) -> f32, majorant_res: u32) -> Heterogeneous {
+        medium_with(res, f, majorant_res, Affine3A::IDENTITY, Wrap::Clamp)
+    }
+
+    /// `medium` with the volume's `to_world` preceded by `extra` (e.g. a rotation) and `wrap`.
+    fn medium_with(
+        res: [u32; 3],
+        f: impl Fn(u32, u32, u32) -> f32,
+        majorant_res: u32,
+        extra: Affine3A,
+        wrap: Wrap,
+    ) -> Heterogeneous {
         let mut data = Vec::new();
         for z in 0..res[2] {
             for y in 0..res[1] {
@@ -386,9 +397,24 @@ mod tests {
 
     /// The DDA's segments tile the clipped ray interval without gaps, and every lookup on a
     /// segment is below its majorant (random rays through a random grid).
+    ///
+    /// Also for a rotated volume (its box then holds points outside the rotated grid, where the
+    /// wrap mode decides the value) and the repeat and mirror wrap modes.
     #[test]
     fn dda_segments_tile_the_ray_and_bound_the_density() {
-        let m = medium([9, 7, 5], |x, y, z| ((x * 5 + y * 3 + z * 7) % 13) as f32 / 13.0, MAJORANT_RES);
+        let f = |x: u32, y: u32, z: u32| ((x * 5 + y * 3 + z * 7) % 13) as f32 / 13.0;
+        let rotation = Affine3A::from_axis_angle(Vec3::new(1.0, 2.0, 0.5).normalize(), 0.7);
+        for m in [
+            medium([9, 7, 5], f, MAJORANT_RES),
+            medium_with([9, 7, 5], f, MAJORANT_RES, rotation, Wrap::Clamp),
+            medium_with([9, 7, 5], f, MAJORANT_RES, rotation, Wrap::Repeat),
+            medium_with([9, 7, 5], f, 5, rotation, Wrap::Mirror),
+        ] {
+            check_dda(&m);
+        }
+    }
+
+    fn check_dda(m: &Heterogeneous) {
         let mut s = Sampler::from_seed(11);
         let (lo, hi) = m.sigma_t.bbox;
         for _ in 0..500 {
