@@ -197,6 +197,13 @@ fn bad_grid_files() {
         &[":5:", filename, "cell (1, 0, 0) channel 2 holds 1.5", "'albedo' values must be finite and lie in [0, 1]"],
     );
     fails("missing-file", None, SIGMA_T_GRID, &[":5:", filename, "grid.vol' not found"]);
+    #[cfg(unix)]
+    fails(
+        "device",
+        None,
+        "<volume name=\"sigma_t\" type=\"gridvolume\">\n<string name=\"filename\" value=\"/dev/zero\"/>\n</volume>",
+        &[":5:", filename, "'/dev/zero': not a regular file"],
+    );
     let mut flat = grid([2, 2, 2], 1, |_, _, _, _| 1.0);
     flat.bbox = (Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0));
     fails(

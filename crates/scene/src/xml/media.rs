@@ -202,7 +202,7 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
     if !path.exists() {
         return Err(p.error_at("filename", format!("volume file '{}' not found", path.display())));
     }
-    let grid = Grid::read_vol(&path).map_err(|m| p.error_at("filename", m))?;
+    let grid = read_vol(&path).map_err(|m| p.error_at("filename", format!("'{}': {m}", path.display())))?;
     if let Some((cell, c, v)) = grid.first_outside(range.0, range.1) {
         return Err(p.error_at(
             "filename",
@@ -231,6 +231,29 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
         to_world
     };
     Ok(Volume::new(VolumeData::Grid { grid: Arc::new(grid), filter, wrap }, to_world))
+}
+
+/// Largest `.vol` file haze reads (as for mesh files, `docs/robustness.md`).
+const MAX_VOLUME_FILE_BYTES: u64 = 2 << 30;
+
+/// Reads a `.vol` file: a regular file (not a device such as `/dev/zero` or a pipe) of at most
+/// [`MAX_VOLUME_FILE_BYTES`], read through that limit.
+fn read_vol(path: &std::path::Path) -> Result<Grid, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > MAX_VOLUME_FILE_BYTES {
+        return Err(format!(
+            "the file is {} bytes; haze reads .vol files of at most {MAX_VOLUME_FILE_BYTES} bytes",
+            meta.len()
+        ));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(MAX_VOLUME_FILE_BYTES).read_to_end(&mut bytes).map_err(|e| format!("cannot read: {e}"))?;
+    Grid::parse_vol(&bytes)
 }
 
 /// A volume's `to_world` as an affine map; it must be invertible and finite.
