@@ -62,7 +62,8 @@ impl MajorantGrid {
             for y in 0..res[1] {
                 for x in 0..res[0] {
                     let a = lo + size * Vec3::new(x as f32, y as f32, z as f32);
-                    let b = if x + 1 == res[0] && y + 1 == res[1] && z + 1 == res[2] { hi } else { a + size };
+                    // The last cell of each axis ends exactly at the box (no rounding gap).
+                    let b = a + size;
                     let b = Vec3::new(
                         if x + 1 == res[0] { hi.x } else { b.x },
                         if y + 1 == res[1] { hi.y } else { b.y },
