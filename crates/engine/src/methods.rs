@@ -57,24 +57,27 @@ impl Method {
             budget: options.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
+        // Name the method in a refusal (e.g. a heterogeneous medium): "integrator 'vrl': ...".
+        let named = |e: haze_scene::lights::EmissionError| anyhow!("integrator '{kind}': {e}");
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {
-                let mut i = VrlIntegrator::new(scene, many_light(), seed)?;
+                let mut i = VrlIntegrator::new(scene, many_light(), seed).map_err(named)?;
                 i.clamp = options.clamp;
                 Method::Vrl(i)
             }
             MethodKind::Vpl => {
-                let mut i = VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?;
+                let mut i =
+                    VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp).map_err(named)?;
                 i.surface_clamp = options.clamp;
                 Method::Vpl(i)
             }
-            MethodKind::VrlLightcuts => {
-                Method::VrlLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
-            }
-            MethodKind::VplLightcuts => {
-                Method::VplLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
-            }
+            MethodKind::VrlLightcuts => Method::VrlLightcuts(
+                LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed).map_err(named)?,
+            ),
+            MethodKind::VplLightcuts => Method::VplLightcuts(
+                LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed).map_err(named)?,
+            ),
         })
     }
 
