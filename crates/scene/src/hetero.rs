@@ -34,7 +34,7 @@ pub struct Heterogeneous {
 }
 
 /// Piecewise-constant per-channel upper bounds of `sigma_t` over a regular grid of boxes
-/// covering the medium's bounding box (`docs/theory.md` §12.2, (T27)).
+/// covering the medium's bounding box (`docs/theory.md` §12.2, (T28)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MajorantGrid {
     pub lo: Vec3,
@@ -220,7 +220,7 @@ impl Heterogeneous {
     /// `sigma_t,h(x) / sigma_maj,h`, else null. Per channel the contributions are
     /// `T_maj sigma_s` (real), `T_maj sigma_n` (null), `T_maj` (pass), and the densities
     /// `T_maj sigma_t` (real), `T_maj sigma_n` (null), `T_maj` (pass), with
-    /// `sigma_n = sigma_maj - sigma_t` (`docs/theory.md` §12.3, (T28)).
+    /// `sigma_n = sigma_maj - sigma_t` (`docs/theory.md` §12.3, (T29)).
     pub fn sample_free_flight(
         &self,
         o: Vec3,
@@ -282,7 +282,7 @@ impl Heterogeneous {
     /// in participating media", Sec. 3.2): tentative collisions from the grey majorant
     /// `mu = max_c sigma_maj,c` of each cell, and the estimate
     /// `T = prod_i (1 - sigma_t(x_i) / mu)` per channel, unbiased for
-    /// `exp(-int_t0^t1 sigma_t)` (`docs/theory.md` §12.4, (T29)); with Russian roulette once every
+    /// `exp(-int_t0^t1 sigma_t)` (`docs/theory.md` §12.4, (T30)); with Russian roulette once every
     /// channel is below 0.05.
     ///
     /// A constant `sigma_t` (a `constvolume`) is homogeneous inside its box: there the exact

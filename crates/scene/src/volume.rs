@@ -294,7 +294,7 @@ impl Volume {
     }
 }
 
-/// Dr.Jit's `tex_eval` on a grid at local point `u` (`docs/theory.md` §12.1, (T25)).
+/// Dr.Jit's `tex_eval` on a grid at local point `u` (`docs/theory.md` §12.1, (T26)).
 #[inline]
 fn eval_grid(grid: &Grid, filter: Filter, wrap: Wrap, u: Vec3) -> Rgb {
     let n = [grid.res[0] as i32, grid.res[1] as i32, grid.res[2] as i32];
