@@ -16,7 +16,8 @@ they measure the work better than wall time.
 Mitsuba 3 runs in a separate Python (default `/tmp/mi/bin/python`, variant `llvm_ad_rgb`; set
 `DRJIT_LIBLLVM_PATH` if drjit does not find libLLVM). Without it the script prints haze's numbers
 only and says so: nothing here is needed by CI. Scenes default to the validation scenes, the
-three bench scenes and the homogeneous Mitsuba 3 media test scenes in ../shared/peers.
+three bench scenes and the homogeneous and heterogeneous Mitsuba 3 media test scenes in
+../shared/peers.
 """
 import argparse
 import json
@@ -46,6 +47,10 @@ DEFAULT_SCENES = (
             "homo_roughdielectric_spot_volpath",
             "homo_spectral_sigmat_volpathmis",
             "surf_area_light_volpath",
+            "hetero_sigmat_volpath",
+            "hetero_sigmat_albedo_volpath",
+            "hetero_spectral_sigmat_no_scattering_volpath",
+            "hetero_spectral_sigmat_volpathmis",
         )
     ]
 )

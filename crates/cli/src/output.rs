@@ -70,20 +70,40 @@ pub fn check_distinct(outputs: &[(&str, PathBuf)], inputs: &[PathBuf]) -> Result
     Ok(())
 }
 
+/// The `-D NAME=VALUE` scene parameters.
+pub fn parse_defines(define: &[String]) -> Result<Vec<(String, String)>> {
+    define
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+            _ => bail!("-D expects NAME=VALUE, got '{d}'"),
+        })
+        .collect()
+}
+
+/// The EXR of one component beside `-o out` (`--components`): `out_single.exr`, ...
+pub(crate) fn component_path(out: &Path, comp: haze_render::Component) -> PathBuf {
+    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
+    out.with_file_name(format!("{stem}_{}.exr", comp.name()))
+}
+
 /// Loads the scene and lists every file it read (the inputs no output may overwrite).
 pub fn load_with_sources(path: &Path, define: &[String]) -> Result<(haze_scene::Scene, Vec<PathBuf>)> {
-    let options = haze_scene::LoadOptions { defines: crate::render_cmd::parse_defines(define)? };
+    let options = haze_scene::LoadOptions { defines: parse_defines(define)? };
     Ok(haze_scene::load_file_with_sources(path, &options)?)
 }
 
-/// Checks every file `haze render` will write against the scene's inputs and each other, and
+/// Checks every file `haze render` will write (`-o output`, with `components` its per-component
+/// EXRs, `--variance-out`, `--cut-image`) against the scene's inputs and each other, and
 /// returns what `-o` stands for.
 pub fn check_render_outputs(
-    args: &crate::render_cmd::Outputs,
+    output: &Path,
     components: bool,
+    variance_out: Option<&Path>,
+    cut_image: Option<&Path>,
     inputs: &[PathBuf],
 ) -> Result<Outputs> {
-    let plan = plan(args.output)?;
+    let plan = plan(output)?;
     let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
     if let Some(exr) = &plan.exr {
         outputs.push(("-o", exr.clone()));
@@ -91,10 +111,10 @@ pub fn check_render_outputs(
     outputs.push((if plan.exr.is_some() { "the PNG preview of -o" } else { "-o" }, plan.png.clone()));
     if components {
         for comp in haze_render::Component::ALL {
-            outputs.push(("--components", crate::render_cmd::component_path(args.output, comp)));
+            outputs.push(("--components", component_path(output, comp)));
         }
     }
-    if let Some(v) = args.variance_out {
+    if let Some(v) = variance_out {
         if extension(v) != "exr" {
             bail!(
                 "--variance-out {}: the variance is written as OpenEXR; give a .exr file name",
@@ -103,7 +123,7 @@ pub fn check_render_outputs(
         }
         outputs.push(("--variance-out", v.to_path_buf()));
     }
-    if let Some(c) = args.cut_image {
+    if let Some(c) = cut_image {
         outputs.push(("--cut-image", c.to_path_buf()));
     }
     check_distinct(&outputs, inputs)?;

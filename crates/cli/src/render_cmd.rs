@@ -110,18 +110,8 @@ impl clap::Args for EngineOptions {
     }
 }
 
-pub fn parse_defines(define: &[String]) -> Result<Vec<(String, String)>> {
-    define
-        .iter()
-        .map(|d| match d.split_once('=') {
-            Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
-            _ => bail!("-D expects NAME=VALUE, got '{d}'"),
-        })
-        .collect()
-}
-
 pub fn load_scene(path: &Path, define: &[String]) -> Result<Scene> {
-    let options = LoadOptions { defines: parse_defines(define)? };
+    let options = LoadOptions { defines: crate::output::parse_defines(define)? };
     Ok(haze_scene::load_file(path, &options)?)
 }
 
@@ -151,11 +141,6 @@ fn install_interrupt_handler() -> Arc<AtomicBool> {
         eprintln!("\ninterrupt: finishing the current pass, then writing the image (Ctrl-C again to abort)");
     });
     flag
-}
-
-pub(crate) fn component_path(out: &Path, comp: Component) -> PathBuf {
-    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "haze".into());
-    out.with_file_name(format!("{stem}_{}.exr", comp.name()))
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
@@ -197,7 +182,13 @@ pub fn render_and_write(
     options: &Options,
     outputs: &Outputs,
 ) -> Result<()> {
-    let plan = crate::output::check_render_outputs(outputs, options.components, outputs.inputs)?;
+    let plan = crate::output::check_render_outputs(
+        outputs.output,
+        options.components,
+        outputs.variance_out,
+        outputs.cut_image,
+        outputs.inputs,
+    )?;
     crate::limits::check_render(options, scene)?;
     if let Some(w) = scene.integrator.path_cap_warning() {
         eprintln!("warning: {w}");
@@ -309,7 +300,7 @@ fn report_and_write(
     }
     if components {
         for comp in Component::ALL {
-            let p = component_path(args.output, comp);
+            let p = crate::output::component_path(args.output, comp);
             write(&p, out.film.mean(Some(comp)))?;
             eprintln!("wrote {} ({})", p.display(), comp.name());
         }

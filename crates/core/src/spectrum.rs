@@ -20,6 +20,10 @@ impl Rgb {
     pub fn map(self, f: impl Fn(f32) -> f32) -> Self {
         Rgb([f(self.0[0]), f(self.0[1]), f(self.0[2])])
     }
+    /// Channel-wise maximum.
+    pub fn max(self, o: Rgb) -> Self {
+        Rgb([self.0[0].max(o.0[0]), self.0[1].max(o.0[1]), self.0[2].max(o.0[2])])
+    }
     pub fn max_component(self) -> f32 {
         self.0[0].max(self.0[1]).max(self.0[2])
     }

@@ -1,29 +1,18 @@
 //! The rendering methods of `haze render --integrator` and `haze compare --method`: one place
 //! that turns a method and its options (`crate::options`) into an integrator and renders with it.
 
+pub use crate::options::MethodOptions;
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{
-    CutSizeProbe, CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
-    VplIntegrator, Vpls, VrlIntegrator, Vrls,
+    CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator,
+    Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
 use haze_render::{Integrator, VolPath};
 use haze_scene::Scene;
 use std::sync::atomic::AtomicBool;
-
-/// Options of the many-light methods (volpath has none). Front ends make them with
-/// [`crate::options::resolve`], which owns their defaults and checks.
-#[derive(Clone, Debug)]
-pub struct MethodOptions {
-    pub budget: LightBudget,
-    /// vpl only: clamp of the geometry term (biased).
-    pub vpl_clamp: Option<f32>,
-    /// vrl and vpl: clamp of the `1/d^2` of surface connections (biased).
-    pub clamp: Option<f32>,
-    pub lightcuts: LightcutSettings,
-}
 
 /// The method `name` names for `scene` (`None`: the scene's own `<integrator>`). `path` is
 /// volpath for scenes without media (Mitsuba 3's `path` ignores media).
@@ -68,24 +57,27 @@ impl Method {
             budget: options.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         };
+        // Name the method in a refusal (e.g. a heterogeneous medium): "integrator 'vrl': ...".
+        let named = |e: haze_scene::lights::EmissionError| anyhow!("integrator '{kind}': {e}");
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {
-                let mut i = VrlIntegrator::new(scene, many_light(), seed)?;
+                let mut i = VrlIntegrator::new(scene, many_light(), seed).map_err(named)?;
                 i.clamp = options.clamp;
                 Method::Vrl(i)
             }
             MethodKind::Vpl => {
-                let mut i = VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp)?;
+                let mut i =
+                    VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp).map_err(named)?;
                 i.surface_clamp = options.clamp;
                 Method::Vpl(i)
             }
-            MethodKind::VrlLightcuts => {
-                Method::VrlLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
-            }
-            MethodKind::VplLightcuts => {
-                Method::VplLightcuts(LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed)?)
-            }
+            MethodKind::VrlLightcuts => Method::VrlLightcuts(
+                LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed).map_err(named)?,
+            ),
+            MethodKind::VplLightcuts => Method::VplLightcuts(
+                LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed).map_err(named)?,
+            ),
         })
     }
 

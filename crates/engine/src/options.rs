@@ -12,7 +12,6 @@
 //! An option given for a method it does not apply to is an error naming the option and the
 //! method, never silently ignored.
 
-use crate::methods::MethodOptions;
 use anyhow::{anyhow, bail, Result};
 use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings};
 use haze_manylight::tree::bound::BoundKind;
@@ -622,6 +621,28 @@ pub fn find(name: &str) -> Option<&'static OptionSpec> {
     OPTIONS.iter().find(|o| o.name == name)
 }
 
+/// Options of the many-light methods (volpath has none). Front ends make them with
+/// [`resolve`], which owns their defaults and checks.
+#[derive(Clone, Debug)]
+pub struct MethodOptions {
+    pub budget: LightBudget,
+    /// vpl only: clamp of the geometry term (biased).
+    pub vpl_clamp: Option<f32>,
+    /// vrl and vpl: clamp of the `1/d^2` of surface connections (biased).
+    pub clamp: Option<f32>,
+    pub lightcuts: LightcutSettings,
+}
+
+/// What every pass of a range shares (`crate::passes`).
+#[derive(Clone, Copy, Debug)]
+pub struct PassSettings {
+    pub seed: u64,
+    /// Samples per pixel in each pass (at least 1).
+    pub spp_per_pass: u32,
+    /// Keep the component split (emitted, single, multiple, surface).
+    pub components: bool,
+}
+
 /// Every setting of a render, as resolved from the table.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -718,8 +739,8 @@ impl Options {
     }
 
     /// The settings of `passes::render_passes` (which renders a pass range: no `spp` or `time`).
-    pub fn pass_settings(&self, method: MethodKind, scene: &Scene) -> crate::passes::PassSettings {
-        crate::passes::PassSettings {
+    pub fn pass_settings(&self, method: MethodKind, scene: &Scene) -> PassSettings {
+        PassSettings {
             seed: self.seed,
             spp_per_pass: self.spp_per_pass_for(method, scene),
             components: self.components,

@@ -13,22 +13,13 @@
 //! or the number of workers.
 
 use crate::methods::Method;
+pub use crate::options::PassSettings;
 use anyhow::{bail, Result};
 use haze_render::progressive::RenderSettings;
 use haze_render::Film;
 use haze_scene::Scene;
 use std::ops::Range;
 use std::sync::atomic::AtomicBool;
-
-/// What every pass of a range shares.
-#[derive(Clone, Copy, Debug)]
-pub struct PassSettings {
-    pub seed: u64,
-    /// Samples per pixel in each pass (at least 1).
-    pub spp_per_pass: u32,
-    /// Keep the component split (emitted, single, multiple, surface).
-    pub components: bool,
-}
 
 /// The film of a pass range and what rendering it reported.
 pub struct PassesOutput {

@@ -286,9 +286,7 @@ fn trace_one(
         }
         let Some(h) = hit else { return };
         let shape = &scene.shapes[h.shape as usize];
-        if shape.bsdf.is_null() {
-            medium = shape.medium_towards(ray.d, h.n, medium);
-            ray = Ray::new(offset_origin(h.p, h.n, ray.d), ray.d);
+        if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
             continue;
         }
         if shape.bsdf.is_black() {

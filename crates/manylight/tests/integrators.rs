@@ -115,36 +115,46 @@ fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
     }
 }
 
-fn check_against_volpath(name: &str, paths: u64, passes: u32) {
-    let scene = load_small(name);
-    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
+/// Renders `scene` with `volpath` (the reference, 16 passes of 256 spp), `vrl`, `vpl` and, with
+/// `lightcuts`, `vrl_lightcuts` and `vpl_lightcuts` (`passes` passes of 1 spp, `paths` light
+/// paths each), and checks every component of each against the reference with `judge` (at most
+/// 1% of the channel-pixels failing the z-test); its lines start with `label`. Returns the
+/// reference.
+fn check_against_volpath(scene: &Scene, label: &str, paths: u64, passes: u32, lightcuts: bool) -> Passes {
+    let reference = render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
     let vrl =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
+        render_passes(scene, &VrlIntegrator::new(scene, settings(scene, paths), 1).unwrap(), passes, 1, 1);
     let vpl = render_passes(
-        &scene,
-        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
+        scene,
+        &VplIntegrator::new(scene, settings(scene, paths), 2, None).unwrap(),
         passes,
         1,
         2,
     );
+    let mut methods = vec![("vrl", vrl), ("vpl", vpl)];
+    if lightcuts {
+        let (vrl_lc, vpl_lc) = lightcut_renders(scene, paths, passes, Default::default(), [5, 6]);
+        methods.extend([("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]);
+    }
     let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl)] {
+    for (method, f) in &methods {
         for comp in Component::ALL {
             let (r, mean_z) = compare(f, &reference, comp);
-            judge(&mut failures, &format!("{name} {method} {}", comp.name()), &r, mean_z, 0.01);
+            judge(&mut failures, &format!("{label}{method} {}", comp.name()), &r, mean_z, 0.01);
         }
     }
-    assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
+    assert!(failures.is_empty(), "{label}\n{}", failures.join("\n"));
+    reference
 }
 
 #[test]
 fn foggy_room_components_match_volpath() {
-    check_against_volpath("foggy-room", 150, 96);
+    check_against_volpath(&load_small("foggy-room"), "foggy-room ", 150, 96, false);
 }
 
 #[test]
 fn hg_box_components_match_volpath() {
-    check_against_volpath("hg-box", 150, 96);
+    check_against_volpath(&load_small("hg-box"), "hg-box ", 150, 96, false);
 }
 
 /// Doubling the number of light paths per pass leaves the expected image unchanged: the image
@@ -175,13 +185,12 @@ fn light_path_count_does_not_change_the_expected_image() {
 /// against the brute-force `vrl`/`vpl` with the same light-path count, component `multiple`
 /// (the virtual lights' part), for cut sizes 1 (the default), 4 and 16.
 fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
-    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    use haze_manylight::integrators::LightcutSettings;
     use haze_manylight::tree::stochastic::StochasticSettings;
     let scene = load_small(name);
     let ml = settings(&scene, paths);
     let vrl = render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 21).unwrap(), passes, 1, 21);
-    let vpl =
-        render_passes(&scene, &VplIntegrator::new(&scene, ml.clone(), 22, None).unwrap(), passes, 1, 22);
+    let vpl = render_passes(&scene, &VplIntegrator::new(&scene, ml, 22, None).unwrap(), passes, 1, 22);
     let mut failures = Vec::new();
     for cut_size in [1, 4, 16] {
         let lc = LightcutSettings {
@@ -189,20 +198,7 @@ fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
             ..Default::default()
         };
         let seed = 30 + cut_size as u64;
-        let a = render_passes(
-            &scene,
-            &LightcutsIntegrator::<Vrls>::new(&scene, ml.clone(), lc, seed).unwrap(),
-            passes,
-            1,
-            seed,
-        );
-        let b = render_passes(
-            &scene,
-            &LightcutsIntegrator::<Vpls>::new(&scene, ml.clone(), lc, seed).unwrap(),
-            passes,
-            1,
-            seed,
-        );
+        let (a, b) = lightcut_renders(&scene, paths, passes, lc, [seed, seed]);
         for (method, f, reference) in [("vrl_lightcuts", &a, &vrl), ("vpl_lightcuts", &b, &vpl)] {
             let (r, mean_z) = compare(f, reference, Component::Multiple);
             judge(&mut failures, &format!("{name} {method} k = {cut_size}"), &r, mean_z, 0.01);
@@ -226,23 +222,13 @@ fn hg_box_stochastic_lightcuts_match_brute_force() {
 /// z-test with haze's variance over passes (the reference's 16384-spp noise added as in
 /// haze-render's validation test) and the image-mean z from the per-pass spread.
 fn check_stochastic_against_mitsuba(name: &str, paths: u64, passes: u32) {
-    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    use haze_manylight::integrators::LightcutSettings;
     use haze_render::image_io::RgbImage;
     let reference = RgbImage::read_exr(&haze_testkit::data::validation(&format!("refs/{name}.exr")))
         .expect("reference EXR");
     let scene = load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     let (w, h) = (reference.width, reference.height);
-    let ml = settings(&scene, paths);
-    let lc = LightcutSettings::default();
-    let a = render_passes(
-        &scene,
-        &LightcutsIntegrator::<Vrls>::new(&scene, ml.clone(), lc, 41).unwrap(),
-        passes,
-        1,
-        41,
-    );
-    let b =
-        render_passes(&scene, &LightcutsIntegrator::<Vpls>::new(&scene, ml, lc, 42).unwrap(), passes, 1, 42);
+    let (a, b) = lightcut_renders(&scene, paths, passes, LightcutSettings::default(), [41, 42]);
     let mut failures = Vec::new();
     for (method, f) in [("vrl_lightcuts", &a), ("vpl_lightcuts", &b)] {
         let sample_var = pool_variance(&f.film.sample_variance(None), w, h, 3);
@@ -279,29 +265,7 @@ fn glass_ball_room_whole_image_matches_volpath() {
     let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml"));
     (scene.camera.width, scene.camera.height) = (16, 12);
     let (paths, passes) = (20, 40);
-    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
-    let vrl =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
-    let vpl = render_passes(
-        &scene,
-        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
-        passes,
-        1,
-        2,
-    );
-    let (vrl_lc, vpl_lc) = lightcut_renders(&scene, paths, passes);
-    let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
-    {
-        for comp in Component::ALL {
-            let (r, mean_z) = compare(f, &reference, comp);
-            println!("{method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
-            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
-                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let reference = check_against_volpath(&scene, "", paths, passes, true);
     let mut wrong = VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap();
     wrong.gather_point_scale = 0.0;
     let wrong = render_passes(&scene, &wrong, 2 * passes, 1, 1);
@@ -324,45 +288,34 @@ fn peer_cbox_whole_image_matches_volpath() {
     let mut scene =
         load_file(&dir.join("tof-cbox-volumetric/small.xml"), &options).expect("peer scene loads");
     (scene.camera.width, scene.camera.height) = (16, 16);
-    let (paths, passes) = (20, 40);
-    let reference = render_passes(&scene, &VolPath::from_spec(&scene.integrator), 16, 256, 11);
-    let vrl =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap(), passes, 1, 1);
-    let vpl = render_passes(
-        &scene,
-        &VplIntegrator::new(&scene, settings(&scene, paths), 2, None).unwrap(),
-        passes,
-        1,
-        2,
-    );
-    let (vrl_lc, vpl_lc) = lightcut_renders(&scene, paths, passes);
-    let mut failures = Vec::new();
-    for (method, f) in [("vrl", &vrl), ("vpl", &vpl), ("vrl_lightcuts", &vrl_lc), ("vpl_lightcuts", &vpl_lc)]
-    {
-        for comp in Component::ALL {
-            let (r, mean_z) = compare(f, &reference, comp);
-            println!("cbox {method} {}: {r}; per-pass image-mean z = {mean_z:.2}", comp.name());
-            if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
-                failures.push(format!("{method} {}: {r}; image-mean z = {mean_z:.2}", comp.name()));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    check_against_volpath(&scene, "cbox ", 20, 40, true);
 }
 
-/// `vrl_lightcuts` and `vpl_lightcuts` with the default settings (stochastic cut of one node;
-/// surface VPLs and gathering points by power sampling).
-fn lightcut_renders(scene: &Scene, paths: u64, passes: u32) -> (Passes, Passes) {
-    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
-    let (ml, lc) = (settings(scene, paths), LightcutSettings::default());
+/// `vrl_lightcuts` and `vpl_lightcuts` with the settings `lc`, `passes` passes of 1 spp and
+/// `paths` light paths each, with the seeds `seeds` (the integrator's and the render's).
+fn lightcut_renders(
+    scene: &Scene,
+    paths: u64,
+    passes: u32,
+    lc: haze_manylight::integrators::LightcutSettings,
+    seeds: [u64; 2],
+) -> (Passes, Passes) {
+    use haze_manylight::integrators::{LightcutsIntegrator, Vpls, Vrls};
+    let ml = settings(scene, paths);
     let a = render_passes(
         scene,
-        &LightcutsIntegrator::<Vrls>::new(scene, ml.clone(), lc, 5).unwrap(),
+        &LightcutsIntegrator::<Vrls>::new(scene, ml.clone(), lc, seeds[0]).unwrap(),
         passes,
         1,
-        5,
+        seeds[0],
     );
-    let b = render_passes(scene, &LightcutsIntegrator::<Vpls>::new(scene, ml, lc, 6).unwrap(), passes, 1, 6);
+    let b = render_passes(
+        scene,
+        &LightcutsIntegrator::<Vpls>::new(scene, ml, lc, seeds[1]).unwrap(),
+        passes,
+        1,
+        seeds[1],
+    );
     (a, b)
 }
 

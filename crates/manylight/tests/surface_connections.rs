@@ -44,7 +44,72 @@ fn lambert64(rho: Rgb, n: Vec3, d: [f64; 3]) -> Rgb64 {
     rgb64(rho).map(|r| r * cos / std::f64::consts::PI)
 }
 
-type Rgb64 = [f64; 3];
+/// A segment-to-point connection case: its estimate with a (mis)computed lobe, and the
+/// reference.
+trait Case {
+    fn estimate(&self, lobe: Lobe) -> McResult;
+    fn reference(&self) -> Rgb64;
+}
+
+/// Checks every case against its reference, and that the check fails both negative controls:
+/// a missing `1/pi` and a missing cosine at the diffuse end `at` ("receiver", "VPL").
+fn check_with_controls<C: Case>(title: &str, cases: &[(&str, C)], at: &str) {
+    let rows = |lobe: Lobe| -> Vec<_> {
+        cases.iter().map(|(name, c)| check(name, &c.estimate(lobe), c.reference())).collect()
+    };
+    let (right, no_pi, no_cos) = (rows(Lobe::Right), rows(Lobe::NoInvPi), rows(Lobe::NoCosine));
+    let (pi_what, cos_what) = (format!("a missing 1/pi at the {at}"), format!("a missing {at} cosine"));
+    report_controls(title, &right, &[(&no_pi, &pi_what), (&no_cos, &cos_what)]);
+}
+
+/// (T12a) and (T12c) are one integral over the segment `seg` (`y_t = o + t d`), lit or
+/// gathered in `medium` (HG `g`, transmittance `exp(-sigma_t t)` from the segment's start),
+/// exchanging light with the diffuse point `p` (normal `n_p`, albedo `rho`) through a
+/// connection of extinction `sigma_conn`, with `n = (p - y_t) / w`:
+/// `Int_0^len flux exp(-sigma_t t) sigma_s f_hg(n . d) exp(-sigma_conn w) rho/pi max(0, -n . n_p) / w^2 dt`
+/// (`docs/theory.md` §5.1, §5.2).
+struct Exchange<'a> {
+    seg: &'a Segment,
+    medium: &'a VrlMedium,
+    g: f32,
+    flux: Rgb,
+    p: Vec3,
+    n_p: Vec3,
+    rho: Rgb,
+    sigma_conn: Rgb,
+}
+
+impl Exchange<'_> {
+    /// The integral by adaptive quadrature over `t`, in `f64`, split at the foot of `p`.
+    fn quadrature(&self) -> Rgb64 {
+        let (o, d) = (d64(self.seg.o), d64(self.seg.d));
+        let p = d64(self.p);
+        let foot: f64 = (0..3).map(|i| (p[i] - o[i]) * d[i]).sum();
+        let len = self.seg.len as f64;
+        let flux = rgb64(self.flux);
+        let (st, ss, sc) = (rgb64(self.medium.sigma_t), rgb64(self.medium.sigma_s), rgb64(self.sigma_conn));
+        let breaks: Vec<f64> = [foot].into_iter().filter(|f| *f > 0.0 && *f < len).collect();
+        integrate(
+            |t| {
+                let y: [f64; 3] = std::array::from_fn(|i| o[i] + t * d[i]);
+                let r: [f64; 3] = std::array::from_fn(|i| p[i] - y[i]);
+                let w2: f64 = r.iter().map(|c| c * c).sum();
+                let w = w2.sqrt();
+                let n: [f64; 3] = r.map(|c| c / w);
+                let cos: f64 = (0..3).map(|i| n[i] * d[i]).sum();
+                let phase = hg64(cos, self.g as f64);
+                let lobe = lambert64(self.rho, self.n_p, n.map(|c| -c));
+                std::array::from_fn(|c| {
+                    flux[c] * (-st[c] * t).exp() * ss[c] * phase * (-sc[c] * w).exp() * lobe[c] / w2
+                })
+            },
+            0.0,
+            len,
+            &breaks,
+            1e-9,
+        )
+    }
+}
 
 struct VrlCase {
     vrl: Vrl,
@@ -80,7 +145,9 @@ impl VrlCase {
             sigma_conn: random_rgb(&mut s, 0.1, 0.8),
         }
     }
+}
 
+impl Case for VrlCase {
     fn estimate(&self, lobe: Lobe) -> McResult {
         let sigma = self.sigma_conn;
         monte_carlo(
@@ -102,33 +169,17 @@ impl VrlCase {
 
     /// (T12a) by adaptive quadrature over `v`, in `f64`.
     fn reference(&self) -> Rgb64 {
-        let (o, d) = (d64(self.vrl.seg.o), d64(self.vrl.seg.d));
-        let x = d64(self.x);
-        let foot: f64 = (0..3).map(|i| (x[i] - o[i]) * d[i]).sum();
-        let len = self.vrl.seg.len as f64;
-        let flux = rgb64(self.vrl.flux);
-        let (st_l, ss_l, sc) =
-            (rgb64(self.medium.sigma_t), rgb64(self.medium.sigma_s), rgb64(self.sigma_conn));
-        let breaks: Vec<f64> = [foot].into_iter().filter(|f| *f > 0.0 && *f < len).collect();
-        integrate(
-            |v| {
-                let y: [f64; 3] = std::array::from_fn(|i| o[i] + v * d[i]);
-                let r: [f64; 3] = std::array::from_fn(|i| x[i] - y[i]);
-                let w2: f64 = r.iter().map(|c| c * c).sum();
-                let w = w2.sqrt();
-                let n: [f64; 3] = r.map(|c| c / w);
-                let cos_l: f64 = (0..3).map(|i| n[i] * d[i]).sum();
-                let phase = hg64(cos_l, self.g as f64);
-                let recv = lambert64(self.rho, self.n_x, n.map(|c| -c));
-                std::array::from_fn(|c| {
-                    flux[c] * (-st_l[c] * v).exp() * ss_l[c] * phase * (-sc[c] * w).exp() * recv[c] / w2
-                })
-            },
-            0.0,
-            len,
-            &breaks,
-            1e-9,
-        )
+        Exchange {
+            seg: &self.vrl.seg,
+            medium: &self.medium,
+            g: self.g,
+            flux: self.vrl.flux,
+            p: self.x,
+            n_p: self.n_x,
+            rho: self.rho,
+            sigma_conn: self.sigma_conn,
+        }
+        .quadrature()
     }
 }
 
@@ -140,17 +191,7 @@ fn vrl_to_surface_point_matches_quadrature() {
         ("foot before start", VrlCase::new(0.2, -0.5, 2.0, -0.4, 3)),
         ("foot past end, hg 0.8", VrlCase::new(0.1, 1.4, 1.0, 0.8, 4)),
     ];
-    let rows: Vec<_> =
-        cases.iter().map(|(name, c)| check(name, &c.estimate(Lobe::Right), c.reference())).collect();
-    let no_pi: Vec<_> =
-        cases.iter().map(|(name, c)| check(name, &c.estimate(Lobe::NoInvPi), c.reference())).collect();
-    let no_cos: Vec<_> =
-        cases.iter().map(|(name, c)| check(name, &c.estimate(Lobe::NoCosine), c.reference())).collect();
-    report_controls(
-        "VRL -> surface point (T12b) against quadrature of (T12a)",
-        &rows,
-        &[(&no_pi, "a missing 1/pi at the receiver"), (&no_cos, "a missing receiver cosine")],
-    );
+    check_with_controls("VRL -> surface point (T12b) against quadrature of (T12a)", &cases, "receiver");
 }
 
 struct SegCase {
@@ -199,7 +240,9 @@ impl SegCase {
             sigma_conn: random_rgb(&mut s, 0.1, 0.8),
         }
     }
+}
 
+impl Case for SegCase {
     fn estimate(&self, lobe: Lobe) -> McResult {
         let sigma = self.sigma_conn;
         let bsdf = Bsdf::Diffuse { reflectance: Texture::Constant(self.rho) };
@@ -228,33 +271,17 @@ impl SegCase {
     /// (T12c)'s integral by adaptive quadrature over `u`, in `f64`, with the diffuse intensity
     /// `Phi rho / pi cos_p`.
     fn reference(&self) -> Rgb64 {
-        let (o, d) = (d64(self.cam.o), d64(self.cam.d));
-        let p = d64(self.vpl.p);
-        let foot: f64 = (0..3).map(|i| (p[i] - o[i]) * d[i]).sum();
-        let len = self.cam.len as f64;
-        let flux = rgb64(self.vpl.flux);
-        let (st, ss, sc) =
-            (rgb64(self.cam_medium.sigma_t), rgb64(self.cam_medium.sigma_s), rgb64(self.sigma_conn));
-        let breaks: Vec<f64> = [foot].into_iter().filter(|f| *f > 0.0 && *f < len).collect();
-        integrate(
-            |u| {
-                let x: [f64; 3] = std::array::from_fn(|i| o[i] + u * d[i]);
-                let r: [f64; 3] = std::array::from_fn(|i| x[i] - p[i]);
-                let w2: f64 = r.iter().map(|c| c * c).sum();
-                let w = w2.sqrt();
-                let n: [f64; 3] = r.map(|c| c / w);
-                let cos_c: f64 = -(0..3).map(|i| n[i] * d[i]).sum::<f64>();
-                let phase = hg64(cos_c, self.g as f64);
-                let i = lambert64(self.rho, self.vpl.n, n);
-                std::array::from_fn(|c| {
-                    flux[c] * i[c] * (-sc[c] * w).exp() * phase * ss[c] * (-st[c] * u).exp() / w2
-                })
-            },
-            0.0,
-            len,
-            &breaks,
-            1e-9,
-        )
+        Exchange {
+            seg: &self.cam,
+            medium: &self.cam_medium,
+            g: self.g,
+            flux: self.vpl.flux,
+            p: self.vpl.p,
+            n_p: self.vpl.n,
+            rho: self.rho,
+            sigma_conn: self.sigma_conn,
+        }
+        .quadrature()
     }
 }
 
@@ -266,17 +293,7 @@ fn surface_vpl_to_camera_segment_matches_quadrature() {
         ("foot before start", SegCase::new(0.2, -0.5, 2.0, -0.4, 13)),
         ("foot past end, hg 0.8", SegCase::new(0.1, 1.4, 1.0, 0.8, 14)),
     ];
-    let rows: Vec<_> =
-        cases.iter().map(|(name, c)| check(name, &c.estimate(Lobe::Right), c.reference())).collect();
-    let no_pi: Vec<_> =
-        cases.iter().map(|(name, c)| check(name, &c.estimate(Lobe::NoInvPi), c.reference())).collect();
-    let no_cos: Vec<_> =
-        cases.iter().map(|(name, c)| check(name, &c.estimate(Lobe::NoCosine), c.reference())).collect();
-    report_controls(
-        "surface VPL -> camera segment (T12c) against quadrature",
-        &rows,
-        &[(&no_pi, "a missing 1/pi at the VPL"), (&no_cos, "a missing VPL cosine")],
-    );
+    check_with_controls("surface VPL -> camera segment (T12c) against quadrature", &cases, "VPL");
 }
 
 /// Surface VPLs spread uniformly over a disk of radius `r` (a Lambertian emitter of total flux

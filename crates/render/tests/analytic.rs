@@ -53,7 +53,7 @@ fn estimate(
 }
 
 fn medium(sigma_t: Rgb, albedo: Rgb, phase: Phase) -> Medium {
-    Medium { name: "m".into(), sigma_t, albedo, phase }
+    Medium::homogeneous("m".into(), sigma_t, albedo, phase)
 }
 
 /// A cube slab `[-1, 1]^3` of absorbing medium behind a null boundary, lit by a uniform

@@ -10,12 +10,14 @@ pub mod camera;
 pub mod emitter;
 pub mod emitter_tables;
 pub mod envmap;
+pub mod hetero;
 pub mod interaction;
 pub mod lights;
 pub mod medium;
 pub mod scene;
 pub mod shape;
 pub mod texture;
+pub mod volume;
 pub mod xml;
 
 pub use bsdf::Bsdf;

@@ -125,18 +125,34 @@ pub(crate) fn surface_vpls_to_segment(
 ) -> haze_core::Rgb {
     let mut sum = haze_core::Rgb::ZERO;
     for (i, vpl) in vpls.iter().enumerate() {
-        let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-        sum += crate::vpl::sample_point_light_to_segment(
-            &cs.seg,
-            cam_medium,
-            vpl.p,
-            |w| vpl.intensity(bsdf, w),
-            light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
-            clamp,
-            |_, x| connect_surface(scene, vpl, x),
-        );
+        sum += surface_vpl_to_segment(scene, vpl, i, cs, cam_medium, key, clamp);
     }
     sum
+}
+
+/// Surface VPL `vpl` (index `i` of its pass) -> camera segment (T12c), with its own random
+/// number from `key` (`SURFACE_VPL_STREAM`): the brute-force sum and the lightcut integrators'
+/// power-sampled sum evaluate the same term.
+#[inline]
+pub(crate) fn surface_vpl_to_segment(
+    scene: &Scene,
+    vpl: &crate::vpl::SurfaceVpl,
+    i: usize,
+    cs: &CameraSegment,
+    cam_medium: &VrlMedium,
+    key: u64,
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+    crate::vpl::sample_point_light_to_segment(
+        &cs.seg,
+        cam_medium,
+        vpl.p,
+        |w| vpl.intensity(bsdf, w),
+        light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
+        clamp,
+        |_, x| connect_surface(scene, vpl, x),
+    )
 }
 
 pub(crate) fn surface_vpls_to_point(
@@ -147,17 +163,49 @@ pub(crate) fn surface_vpls_to_point(
 ) -> haze_core::Rgb {
     let mut sum = haze_core::Rgb::ZERO;
     for vpl in vpls {
-        let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-        sum += crate::vpl::point_light_to_point(
-            gp.p,
-            |d| gp.reflectance(d),
-            vpl.p,
-            |w| vpl.intensity(bsdf, w),
-            clamp,
-            |_, x| connect_surface(scene, vpl, x),
-        );
+        sum += surface_vpl_to_point(scene, vpl, gp, clamp);
     }
     sum
+}
+
+/// Surface VPL `vpl` -> gathering point `gp` (T12d).
+#[inline]
+pub(crate) fn surface_vpl_to_point(
+    scene: &Scene,
+    vpl: &crate::vpl::SurfaceVpl,
+    gp: &crate::gather::GatherPoint,
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
+    crate::vpl::point_light_to_point(
+        gp.p,
+        |d| gp.reflectance(d),
+        vpl.p,
+        |w| vpl.intensity(bsdf, w),
+        clamp,
+        |_, x| connect_surface(scene, vpl, x),
+    )
+}
+
+/// Medium VPL `vpl` -> gathering point `gp` (`docs/theory.md` §5.3), the phase function of
+/// the VPL's medium (from `media`) as its intensity.
+#[inline]
+pub(crate) fn medium_vpl_to_point(
+    scene: &Scene,
+    vpl: &crate::vpl::Vpl,
+    gp: &crate::gather::GatherPoint,
+    media: &[VrlMedium],
+    clamp: Option<f32>,
+) -> haze_core::Rgb {
+    let phase = &media[vpl.medium as usize].phase;
+    crate::vpl::point_light_to_point(
+        gp.p,
+        |d| gp.reflectance(d),
+        vpl.p,
+        |n| vpl.flux * phase.eval(vpl.d_in, n),
+        clamp,
+        |y, x| connect(scene, vpl.medium, y, x),
+    )
 }
 
 /// Two uniform numbers for light `light` from a per-camera-segment key: every light gets

@@ -3,13 +3,13 @@
 //! surface point of the camera path (`docs/theory.md` §2.1).
 
 use super::{
-    connect, light_uniforms, media, paths_per_pass, split_groups, surface_vpls, surface_vpls_to_point,
-    surface_vpls_to_segment, ManyLightSettings, PassTracer,
+    connect, light_uniforms, media, medium_vpl_to_point, paths_per_pass, split_groups, surface_vpls,
+    surface_vpls_to_point, surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::VplRecord;
-use crate::vpl::{point_light_to_point, SurfaceVpl};
+use crate::vpl::SurfaceVpl;
 use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
@@ -123,15 +123,7 @@ impl Gather for VplGather<'_> {
         let clamp = self.integrator.surface_clamp;
         let mut sum = surface_vpls_to_point(scene, &pass.surface_vpls, gp, clamp);
         for vpl in pass.groups.iter().flatten() {
-            let phase = &pass.media[vpl.medium as usize].phase;
-            sum += point_light_to_point(
-                gp.p,
-                |d| gp.reflectance(d),
-                vpl.p,
-                |n| vpl.flux * phase.eval(vpl.d_in, n),
-                clamp,
-                |y, x| connect(scene, vpl.medium, y, x),
-            );
+            sum += medium_vpl_to_point(scene, vpl, gp, &pass.media, clamp);
         }
         sum
     }

@@ -154,7 +154,9 @@ pub(crate) fn sample_point_pair(cam: &Segment, vrl: &Segment, u: Vec2) -> Option
 }
 
 /// Second stage of [`sample_vrl_contribution`]: the estimate `f(u, v) / p(u, v)` at a sampled
-/// [`PointPair`], with the connection's transmittance and visibility from `connect(y, x)`.
+/// [`PointPair`], with the connection's transmittance and visibility from `connect(y, x)`:
+/// `Phi(v) sigma_s_l f_l Tr_conn f_c sigma_s_c T_c(u)` (the integrand times `w^2`) times the
+/// pair's `1 / (w^2 p(u, v))`.
 #[inline]
 pub(crate) fn point_pair_estimate(
     cam: &Segment,
@@ -162,10 +164,18 @@ pub(crate) fn point_pair_estimate(
     vrl: &Vrl,
     vrl_medium: &VrlMedium,
     pair: &PointPair,
-    connect: impl FnMut(Vec3, Vec3) -> Rgb,
+    mut connect: impl FnMut(Vec3, Vec3) -> Rgb,
 ) -> Rgb {
     let PointPair { u, v, x, y, inv_w2_pdf } = *pair;
-    terms_without_inverse_square(cam, cam_medium, vrl, vrl_medium, u, v, x, y, connect) * inv_w2_pdf
+    let n = connection_direction(x - y, cam.d, vrl.seg.d);
+    let phases = vrl_medium.phase.eval(vrl.seg.d, n) * cam_medium.phase.eval(n, -cam.d);
+    vrl.flux_at(vrl_medium.sigma_t, v)
+        * vrl_medium.sigma_s
+        * connect(y, x)
+        * cam_medium.sigma_s
+        * exp_neg(cam_medium.sigma_t, u)
+        * phases
+        * inv_w2_pdf
 }
 
 /// The integrand `f(u, v)` of the contribution (module docs) at camera distance `u` and VRL
@@ -184,31 +194,8 @@ pub fn vrl_integrand(
         return Rgb::ZERO;
     }
     let (x, y) = (cam.at(u), vrl.seg.at(v));
-    let w2 = (x.as_dvec3() - y.as_dvec3()).length_squared();
-    terms_without_inverse_square(cam, cam_medium, vrl, vrl_medium, u, v, x, y, connect) / w2 as f32
-}
-
-/// `Phi(v) sigma_s_l f_l Tr_conn f_c sigma_s_c T_c(u)`: the integrand times `w^2`.
-#[allow(clippy::too_many_arguments)]
-fn terms_without_inverse_square(
-    cam: &Segment,
-    cam_medium: &VrlMedium,
-    vrl: &Vrl,
-    vrl_medium: &VrlMedium,
-    u: f32,
-    v: f32,
-    x: Vec3,
-    y: Vec3,
-    mut connect: impl FnMut(Vec3, Vec3) -> Rgb,
-) -> Rgb {
-    let n = connection_direction(x - y, cam.d, vrl.seg.d);
-    let phases = vrl_medium.phase.eval(vrl.seg.d, n) * cam_medium.phase.eval(n, -cam.d);
-    vrl.flux_at(vrl_medium.sigma_t, v)
-        * vrl_medium.sigma_s
-        * connect(y, x)
-        * cam_medium.sigma_s
-        * exp_neg(cam_medium.sigma_t, u)
-        * phases
+    let inv_w2_pdf = (1.0 / (x.as_dvec3() - y.as_dvec3()).length_squared()) as f32;
+    point_pair_estimate(cam, cam_medium, vrl, vrl_medium, &PointPair { u, v, x, y, inv_w2_pdf }, connect)
 }
 
 /// `sigma.exp_neg(d)` (`exp(-sigma d)` per channel) with a single `exp` when the channels are

@@ -23,7 +23,7 @@ pub fn sample_vrl_to_point(
     vrl: &Vrl,
     vrl_medium: &VrlMedium,
     u: f32,
-    connect: impl FnMut(Vec3, Vec3) -> Rgb,
+    mut connect: impl FnMut(Vec3, Vec3) -> Rgb,
 ) -> Rgb {
     let seg = &vrl.seg;
     if !(seg.len > 0.0 && seg.len.is_finite()) || (vrl.flux * vrl_medium.sigma_s).is_black() {
@@ -36,40 +36,18 @@ pub fn sample_vrl_to_point(
         return Rgb::ZERO;
     };
     let v = (eq.sample(u as f64) as f32).min(seg.len);
-    terms_without_geometry(x, &receiver, vrl, vrl_medium, v, connect) * (eq.span / eq.h) as f32
-}
-
-/// The integrand of [`sample_vrl_to_point`] at `v` (zero outside the VRL); for tests.
-pub fn vrl_to_point_integrand(
-    x: Vec3,
-    receiver: impl Fn(Vec3) -> Rgb,
-    vrl: &Vrl,
-    vrl_medium: &VrlMedium,
-    v: f32,
-    connect: impl FnMut(Vec3, Vec3) -> Rgb,
-) -> Rgb {
-    if !(0.0..=vrl.seg.len).contains(&v) {
-        return Rgb::ZERO;
-    }
-    let w2 = (x.as_dvec3() - vrl.seg.at(v).as_dvec3()).length_squared();
-    terms_without_geometry(x, &receiver, vrl, vrl_medium, v, connect) * (1.0 / w2) as f32
-}
-
-/// `Phi(v) sigma_s_l f_l(w_l, n) Tr R(-n)`: the integrand without `1/w^2`.
-fn terms_without_geometry(
-    x: Vec3,
-    receiver: &impl Fn(Vec3) -> Rgb,
-    vrl: &Vrl,
-    vrl_medium: &VrlMedium,
-    v: f32,
-    mut connect: impl FnMut(Vec3, Vec3) -> Rgb,
-) -> Rgb {
-    let y = vrl.seg.at(v);
-    let n = connection_direction(x - y, vrl.seg.d, vrl.seg.d.any_orthonormal_vector());
+    // `Phi(v) sigma_s_l f_l(w_l, n) Tr R(-n)`: the integrand without `1/w^2`.
+    let y = seg.at(v);
+    let n = connection_direction(x - y, seg.d, seg.d.any_orthonormal_vector());
     let f = receiver(-n);
     if f.is_black() {
         return Rgb::ZERO;
     }
-    let phase = vrl_medium.phase.eval(vrl.seg.d, n);
-    vrl.flux_at(vrl_medium.sigma_t, v) * vrl_medium.sigma_s * f * connect(y, x) * phase
+    let phase = vrl_medium.phase.eval(seg.d, n);
+    vrl.flux_at(vrl_medium.sigma_t, v)
+        * vrl_medium.sigma_s
+        * f
+        * connect(y, x)
+        * phase
+        * (eq.span / eq.h) as f32
 }

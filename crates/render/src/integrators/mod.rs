@@ -3,7 +3,7 @@
 mod nee;
 mod volpath;
 
-pub use nee::{surface_nee, transmittance_to, SurfaceMis};
+pub use nee::{surface_nee, transmittance_to, transmittance_to_sampled, SurfaceMis};
 pub use volpath::VolPath;
 
 use crate::components::PathRadiance;

@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 use haze_core::ray::offset_origin;
 use haze_core::transmittance::transmittance;
-use haze_core::{Frame, Ray, Rgb};
+use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::accel::{ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use haze_scene::{Bsdf, MediumId, Scene};
 
@@ -34,13 +34,71 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 /// are collected and crossed in order along the same line), so after a null crossing the ray
 /// keeps the direction aimed at `y` from the first origin rather than being re-aimed from an
 /// offset origin; the segment lengths then sum to exactly `|y - o| (1 - SHADOW_EPSILON)`.
+///
+/// Heterogeneous media have no deterministic transmittance: their segments are estimated by
+/// ratio tracking with a sampler seeded from the ray (unbiased per query; prefer
+/// [`transmittance_to_sampled`], which draws from the caller's sampler).
 pub fn transmittance_to(
     scene: &Scene,
     p: Vec3,
     n_start: Option<Vec3>,
     d: Vec3,
     dist: f32,
+    medium: Option<MediumId>,
+) -> Rgb {
+    transmittance_impl(scene, p, n_start, d, dist, medium, None)
+}
+
+/// [`transmittance_to`] with the ratio-tracking estimates of heterogeneous segments
+/// (`docs/theory.md` §12.4) drawn from `sampler`; homogeneous media draw nothing, so scenes
+/// without heterogeneous media render bit for bit as with [`transmittance_to`].
+pub fn transmittance_to_sampled(
+    scene: &Scene,
+    p: Vec3,
+    n_start: Option<Vec3>,
+    d: Vec3,
+    dist: f32,
+    medium: Option<MediumId>,
+    sampler: &mut Sampler,
+) -> Rgb {
+    transmittance_impl(scene, p, n_start, d, dist, medium, Some(sampler))
+}
+
+/// Ratio tracking over `[t0, t1]` of `ray` in heterogeneous medium `m`, from `sampler` or,
+/// without one, from a sampler seeded by the ray's bits.
+fn hetero_segment(
+    h: &haze_scene::hetero::Heterogeneous,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    sampler: &mut Option<&mut Sampler>,
+) -> Rgb {
+    match sampler {
+        Some(s) => h.transmittance(ray.o, ray.d, t0, t1, s),
+        None => {
+            let key = [ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z, t0]
+                .iter()
+                .fold(0u64, |k, v| haze_core::rng::mix64(k ^ v.to_bits() as u64));
+            h.transmittance(
+                ray.o,
+                ray.d,
+                t0,
+                t1,
+                &mut Sampler::new(0x6865_7465_726f, key, t1.to_bits() as u64),
+            )
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn transmittance_impl(
+    scene: &Scene,
+    p: Vec3,
+    n_start: Option<Vec3>,
+    d: Vec3,
+    dist: f32,
     mut medium: Option<MediumId>,
+    mut sampler: Option<&mut Sampler>,
 ) -> Rgb {
     let target = dist.is_finite().then(|| p + d * dist);
     let origin = match n_start {
@@ -55,7 +113,7 @@ pub fn transmittance_to(
     let n = match scene.shadow_hits(&ray, &mut hits) {
         ShadowQuery::Blocked => return Rgb::ZERO,
         ShadowQuery::Clear(n) => n,
-        ShadowQuery::Unsupported => return transmittance_segments(scene, origin, target, d, medium),
+        ShadowQuery::Unsupported => return transmittance_segments(scene, origin, target, d, medium, sampler),
     };
     let hits = &mut hits[..n];
     // Ties (a ray through a shared edge meets both triangles) in BVH order: deterministic.
@@ -65,7 +123,11 @@ pub fn transmittance_to(
     let mut last = 0.0f32;
     for h in hits.iter() {
         if let Some(m) = medium {
-            tau += scene.medium(m).sigma_t * (h.t - last);
+            let med = scene.medium(m);
+            match &med.hetero {
+                None => tau += med.sigma_t * (h.t - last),
+                Some(het) => tr *= hetero_segment(het, &ray, last, h.t, &mut sampler),
+            }
         }
         last = h.t;
         let si = scene.shadow_interaction(h);
@@ -77,8 +139,11 @@ pub fn transmittance_to(
         medium = shape.medium_towards(ray.d, si.n, medium);
     }
     if let Some(m) = medium {
-        let sigma_t = scene.medium(m).sigma_t;
-        if ray.t_max.is_finite() {
+        let med = scene.medium(m);
+        let sigma_t = med.sigma_t;
+        if let Some(het) = &med.hetero {
+            tr *= hetero_segment(het, &ray, last, ray.t_max, &mut sampler);
+        } else if ray.t_max.is_finite() {
             tau += sigma_t * (ray.t_max - last);
         } else {
             tr *= transmittance(sigma_t, f32::INFINITY);
@@ -151,8 +216,15 @@ pub fn surface_nee(
     if f.is_black() {
         return Rgb::ZERO;
     }
-    let tr =
-        transmittance_to(scene, h.p, Some(h.n), es.wi, es.dist, shape.medium_towards(es.wi, h.n, medium));
+    let tr = transmittance_to_sampled(
+        scene,
+        h.p,
+        Some(h.n),
+        es.wi,
+        es.dist,
+        shape.medium_towards(es.wi, h.n, medium),
+        sampler,
+    );
     if tr.is_black() {
         return Rgb::ZERO;
     }
@@ -187,6 +259,7 @@ fn transmittance_segments(
     target: Option<Vec3>,
     d: Vec3,
     mut medium: Option<MediumId>,
+    mut sampler: Option<&mut Sampler>,
 ) -> Rgb {
     let mut tr = Rgb::ONE;
     for _ in 0..256 {
@@ -194,7 +267,11 @@ fn transmittance_segments(
         let hit = scene.intersect(&ray);
         let seg = hit.map_or(ray.t_max, |h| h.t);
         if let Some(m) = medium {
-            tr *= beer_lambert(scene.medium(m).sigma_t, seg);
+            let med = scene.medium(m);
+            tr *= match &med.hetero {
+                None => beer_lambert(med.sigma_t, seg),
+                Some(het) => hetero_segment(het, &ray, 0.0, seg, &mut sampler),
+            };
             if tr.is_black() {
                 return Rgb::ZERO;
             }

@@ -1,5 +1,7 @@
-//! `volpath`: unbiased volumetric path tracing in homogeneous media — the reference every
-//! many-light method in haze is checked against.
+//! `volpath`: unbiased volumetric path tracing in homogeneous and heterogeneous media — the
+//! reference every many-light method in haze is checked against. Heterogeneous media are
+//! sampled by delta tracking and their transmittance estimated by ratio tracking, both against
+//! a majorant grid (`haze_scene::hetero`, `docs/theory.md` §12.2-12.4).
 //!
 //! Follows Mitsuba 3's `volpath` in its observable conventions, because the validation
 //! references come from it:
@@ -16,13 +18,14 @@
 //! `volpath`'s single hero channel. Both are unbiased; MIS has far lower variance when channels
 //! differ. Every contribution is divided by `mean(r)`, the pdf ratios of the path so far.
 
-use super::nee::{surface_nee, transmittance_to, SurfaceMis};
+use super::nee::{surface_nee, transmittance_to_sampled, SurfaceMis};
 use super::Integrator;
 use crate::components::{Component, PathRadiance};
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
 use haze_core::{Frame, Ray, Rgb, Sampler};
+use haze_scene::hetero::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
 
 #[derive(Clone, Debug)]
@@ -93,8 +96,23 @@ impl Integrator for VolPath {
 
             if let Some(mid) = medium {
                 let med = scene.medium(mid);
-                match sample_free_flight(med.sigma_t, t_surface, hero, sampler.next_1d()) {
-                    FreeFlight::Interaction { t, weight, ratio } => {
+                // Homogeneous: `sigma_s` multiplies after the depth check, as it always did (the
+                // same rounding); heterogeneous: the flight's weight already holds `sigma_s(x)`.
+                let (flight, sigma_s) = match &med.hetero {
+                    None => (
+                        match sample_free_flight(med.sigma_t, t_surface, hero, sampler.next_1d()) {
+                            FreeFlight::Interaction { t, weight, ratio } => {
+                                Flight::Scatter { t, weight, ratio }
+                            }
+                            FreeFlight::Pass { weight, ratio } => Flight::Pass { weight, ratio },
+                        },
+                        med.sigma_s(),
+                    ),
+                    // Delta tracking against the majorant grid (`docs/theory.md` §12.3).
+                    Some(h) => (h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler), Rgb::ONE),
+                };
+                match flight {
+                    Flight::Scatter { t, weight, ratio } => {
                         let p = ray.at(t);
                         beta *= weight;
                         r *= ratio;
@@ -103,7 +121,11 @@ impl Integrator for VolPath {
                         if depth >= max_depth {
                             break;
                         }
-                        beta *= med.sigma_s();
+                        beta *= sigma_s;
+                        // A black throughput (albedo 0) has nothing left to estimate: no shadow ray.
+                        if beta.is_black() {
+                            break;
+                        }
                         let class = Component::classify(medium_events, surface_events);
 
                         // Next-event estimation, MIS with phase sampling.
@@ -112,7 +134,8 @@ impl Integrator for VolPath {
                         {
                             let ph = med.phase.eval(ray.d, es.wi);
                             if ph > 0.0 {
-                                let tr = transmittance_to(scene, p, None, es.wi, es.dist, medium);
+                                let tr =
+                                    transmittance_to_sampled(scene, p, None, es.wi, es.dist, medium, sampler);
                                 if !tr.is_black() {
                                     let w = if es.is_delta { 1.0 } else { power_heuristic(es.pdf, ph) };
                                     out.add(class, beta * es.radiance * tr * (ph * w / (es.pdf * r.mean())));
@@ -128,7 +151,7 @@ impl Integrator for VolPath {
                         ray = Ray::new(p, d);
                         continue;
                     }
-                    FreeFlight::Pass { weight, ratio } => {
+                    Flight::Pass { weight, ratio } => {
                         beta *= weight;
                         r *= ratio;
                     }
@@ -162,9 +185,7 @@ impl Integrator for VolPath {
             }
 
             let shape = &scene.shapes[h.shape as usize];
-            if shape.bsdf.is_null() {
-                medium = shape.medium_towards(ray.d, h.n, medium);
-                ray = Ray::new(offset_origin(h.p, h.n, ray.d), ray.d);
+            if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
                 continue;
             }
             if shape.bsdf.is_black() {

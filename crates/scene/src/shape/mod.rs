@@ -13,6 +13,8 @@ pub use sample::{AreaSampler, SurfaceSample};
 use crate::bsdf::Bsdf;
 use crate::medium::MediumId;
 use glam::{Mat4, Vec3};
+use haze_core::ray::offset_origin;
+use haze_core::Ray;
 
 /// Geometry of a shape, in world space.
 #[derive(Clone, Debug)]
@@ -75,5 +77,19 @@ impl Shape {
         } else {
             self.interior
         }
+    }
+
+    /// A walk's step through this shape where its BSDF is `null` (a boundary that only changes
+    /// the medium, not a scattering event): `ray` goes on in the same direction from just past
+    /// the hit point `p` (geometric normal `n`), in the medium beyond. Returns false, changing
+    /// nothing, for any other BSDF. The one step of volpath, the many-light camera walk and
+    /// light tracing.
+    pub fn cross_if_null(&self, p: Vec3, n: Vec3, ray: &mut Ray, medium: &mut Option<MediumId>) -> bool {
+        if !self.bsdf.is_null() {
+            return false;
+        }
+        *medium = self.medium_towards(ray.d, n, *medium);
+        *ray = Ray::new(offset_origin(p, n, ray.d), ray.d);
+        true
     }
 }

@@ -60,6 +60,9 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             "texture" => {
                 textures::build(&b.params(el)?)?;
             }
+            "volume" => {
+                media::volume(&b.params(el)?, "volume", (0.0, f32::INFINITY), b.doc)?;
+            }
             "film" | "sampler" | "rfilter" => {
                 return Err(el.error(format!(
                     "<{}> must be nested inside {}",
@@ -74,7 +77,6 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             tag if VALUE_TAGS.contains(&tag) => {
                 return Err(el.error("a parameter must be inside the plugin element it belongs to"))
             }
-            "volume" => return Err(el.error(format!("unsupported: haze has no <{}> plugins", el.tag))),
             tag => return Err(el.error(format!("unknown element <{tag}>"))),
         }
     }

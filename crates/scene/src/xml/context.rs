@@ -47,7 +47,7 @@ impl<'a> Builder<'a> {
             Some(id) => id.to_string(),
             None => format!("medium{}", self.media.len()),
         };
-        let medium = media::build(&self.params(el)?, name)?;
+        let medium = media::build(&self.params(el)?, name, self.doc)?;
         let id = self.media.len() as MediumId;
         self.media.push(medium);
         self.media_by_element.insert(el.uid, id);

@@ -1,15 +1,29 @@
-//! Medium plugin `homogeneous` and phase function plugins `isotropic` and `hg`.
+//! Medium plugins `homogeneous` and `heterogeneous`, volume plugins `gridvolume` and
+//! `constvolume`, and phase function plugins `isotropic` and `hg`.
 
+use super::document::Document;
 use super::params::Params;
 use super::LoadError;
+use crate::hetero::{Heterogeneous, MajorantGrid, MAJORANT_RES};
 use crate::medium::Medium;
+use crate::volume::{Filter, Grid, Volume, VolumeData, Wrap};
+use glam::{Affine3A, Mat4};
 use haze_core::{Phase, Rgb};
+use std::sync::Arc;
+
+/// Builds a `<medium>` named `name`.
+pub(super) fn build(p: &Params, name: String, doc: &Document) -> Result<Medium, LoadError> {
+    match p.ty() {
+        "heterogeneous" => heterogeneous(p, name, doc),
+        _ => homogeneous(p, name),
+    }
+}
 
 /// Builds a `homogeneous` medium named `name`. Parameters (Mitsuba 3 defaults): `sigma_t`
 /// (1, per unit length, >= 0), `albedo` (0.75, in [0, 1]), `scale` (1, >= 0, multiplies
 /// `sigma_t`), one nested `<phase>` (isotropic), `sample_emitters` (true; haze always samples
 /// emitters, so `false` is unsupported). `sigma_t` and `albedo` are RGB, or a float for grey.
-pub(super) fn build(p: &Params, name: String) -> Result<Medium, LoadError> {
+fn homogeneous(p: &Params, name: String) -> Result<Medium, LoadError> {
     let sigma_t = p.spectrum("sigma_t", Rgb::ONE)?;
     if sigma_t.min_component() < 0.0 {
         return Err(p.error_at("sigma_t", "'sigma_t' must not be negative"));
@@ -22,22 +36,8 @@ pub(super) fn build(p: &Params, name: String) -> Result<Medium, LoadError> {
     if scale < 0.0 {
         return Err(p.error_at("scale", format!("'scale' must not be negative, got {scale}")));
     }
-    if !p.bool("sample_emitters", true)? {
-        return Err(p.error_at(
-            "sample_emitters",
-            "unsupported: sample_emitters=false (haze always samples emitters in media)",
-        ));
-    }
-    let phases = p.objects(&["phase"]);
-    if let Some(second) = phases.get(1) {
-        return Err(second
-            .site
-            .error(format!("a medium takes one <phase>; another is at line {}", phases[0].site.line)));
-    }
-    let phase = match phases.first() {
-        Some(o) => phase(&p.nested(o.target)?)?,
-        None => Phase::Isotropic,
-    };
+    sample_emitters(p)?;
+    let phase = nested_phase(p)?;
     p.finish()?;
     let sigma_t = sigma_t.map(|s| s * scale);
     if sigma_t.max_component() > super::MAX_MAGNITUDE {
@@ -50,7 +50,220 @@ pub(super) fn build(p: &Params, name: String) -> Result<Medium, LoadError> {
             ),
         ));
     }
-    Ok(Medium { name, sigma_t, albedo, phase })
+    Ok(Medium::homogeneous(name, sigma_t, albedo, phase))
+}
+
+fn sample_emitters(p: &Params) -> Result<(), LoadError> {
+    if !p.bool("sample_emitters", true)? {
+        return Err(p.error_at(
+            "sample_emitters",
+            "unsupported: sample_emitters=false (haze always samples emitters in media)",
+        ));
+    }
+    Ok(())
+}
+
+/// The medium's one nested `<phase>` (or a `<ref>` to one); isotropic if none.
+fn nested_phase(p: &Params) -> Result<Phase, LoadError> {
+    let phases = p.objects(&["phase"]);
+    if let Some(second) = phases.get(1) {
+        return Err(second
+            .site
+            .error(format!("a medium takes one <phase>; another is at line {}", phases[0].site.line)));
+    }
+    match phases.first() {
+        Some(o) => phase(&p.nested(o.target)?),
+        None => Ok(Phase::Isotropic),
+    }
+}
+
+/// Builds a `heterogeneous` medium named `name` (Mitsuba 3's `src/media/heterogeneous.cpp`):
+/// `sigma_t` (1) and `albedo` (0.75), each a float, an RGB or a nested `<volume>` (or a
+/// `<ref>` to one); `scale` (1, >= 0, multiplies `sigma_t`); one `<phase>`;
+/// `sample_emitters` (true only). A float or RGB is, as in Mitsuba 3, a `constvolume` over the
+/// unit cube, and the medium is clipped to the `sigma_t` volume's bounding box.
+fn heterogeneous(p: &Params, name: String, doc: &Document) -> Result<Medium, LoadError> {
+    for o in p.objects(&["volume"]) {
+        if !o.name.is_some_and(|n| n == "sigma_t" || n == "albedo") {
+            let what = o.name.map_or("a <volume> without a name".to_string(), |n| format!("a volume '{n}'"));
+            return Err(o.site.error(format!(
+                "{} does not take {what} (volume parameters: sigma_t, albedo)",
+                p.element().describe()
+            )));
+        }
+    }
+    let sigma_t = volume_param(p, "sigma_t", Rgb::ONE, (0.0, super::MAX_MAGNITUDE), doc)?;
+    let albedo = volume_param(p, "albedo", Rgb::splat(0.75), (0.0, 1.0), doc)?;
+    let scale = p.float("scale", 1.0)?;
+    if scale < 0.0 {
+        return Err(p.error_at("scale", format!("'scale' must not be negative, got {scale}")));
+    }
+    sample_emitters(p)?;
+    let phase = nested_phase(p)?;
+    p.finish()?;
+    let max = sigma_t.max() * scale;
+    if max.max_component() > super::MAX_MAGNITUDE {
+        return Err(p.error_at(
+            "scale",
+            format!(
+                "'sigma_t' times 'scale' must be at most {:e}, got {:e}: distances times it overflow",
+                super::MAX_MAGNITUDE,
+                max.max_component()
+            ),
+        ));
+    }
+    // A constant needs one majorant cell; a grid gets pbrt-v4's 16^3.
+    let res = match sigma_t.data {
+        VolumeData::Const(_) => [1; 3],
+        VolumeData::Grid { .. } => [MAJORANT_RES; 3],
+    };
+    let majorants = MajorantGrid::build(&sigma_t, scale, res);
+    let hetero = Heterogeneous { sigma_t, albedo, scale, majorants };
+    let (bound, albedo_max) = (hetero.global_majorant(), hetero.albedo.max());
+    Ok(Medium { name, sigma_t: bound, albedo: albedo_max, phase, hetero: Some(Arc::new(hetero)) })
+}
+
+/// The volume-valued parameter `name` of a medium: a float or RGB (a constant over the unit
+/// cube, as Mitsuba 3's `props.get_volume` makes it), a nested `<volume name="..">` or a
+/// `<ref name=".." id=".."/>` to one; `default` if none is given. Every value must lie in
+/// `[lo, hi]`.
+fn volume_param(
+    p: &Params,
+    name: &str,
+    default: Rgb,
+    range: (f32, f32),
+    doc: &Document,
+) -> Result<Volume, LoadError> {
+    let objects: Vec<_> = p.objects(&["volume"]).into_iter().filter(|o| o.name == Some(name)).collect();
+    let spectrum = p.spectrum_opt(name)?;
+    match (objects.as_slice(), spectrum) {
+        ([], None) => Ok(Volume::constant(default)),
+        ([], Some(c)) => {
+            check_range(c, range).map_err(|m| p.error_at(name, format!("'{name}' {m}")))?;
+            Ok(Volume::constant(c))
+        }
+        ([o], None) => volume(&p.nested(o.target)?, name, range, doc),
+        ([o, ..], _) => Err(o.site.error(format!("'{name}' is given more than once"))),
+    }
+}
+
+fn check_range(c: Rgb, (lo, hi): (f32, f32)) -> Result<(), String> {
+    if c.0.iter().all(|v| *v >= lo && *v <= hi) {
+        Ok(())
+    } else {
+        Err(format!("must lie in [{lo}, {hi}] in every channel, got {c}"))
+    }
+}
+
+/// Builds a `<volume>` used as the medium parameter `what`, whose values must lie in `range`.
+/// - `constvolume`: `value` (1; float or RGB), `to_world` (identity; only sets the bounding
+///   box);
+/// - `gridvolume`: `filename` (a `.vol` file, required), `filter_type` (`trilinear`; or
+///   `nearest`), `wrap_mode` (`clamp`; or `repeat`, `mirror`), `to_world` (identity),
+///   `use_grid_bbox` (false: the grid spans the unit cube; true: the box in the file), `raw`
+///   (false; no effect in RGB rendering, as in Mitsuba's RGB variants).
+pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) -> Result<Volume, LoadError> {
+    let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let to_world = affine(p, &to_world)?;
+    if p.ty() == "constvolume" {
+        let value = p.spectrum("value", Rgb::ONE)?;
+        check_range(value, range)
+            .map_err(|m| p.error_at("value", format!("'value' of the '{what}' volume {m}")))?;
+        p.finish()?;
+        return Ok(Volume::new(VolumeData::Const(value), to_world));
+    }
+    let filename =
+        p.string_opt("filename")?.ok_or_else(|| p.element().error("missing parameter 'filename'"))?;
+    let filter = match p.string_opt("filter_type")?.unwrap_or("trilinear") {
+        "trilinear" => Filter::Trilinear,
+        "nearest" => Filter::Nearest,
+        other => {
+            return Err(p.error_at(
+                "filter_type",
+                format!("invalid filter_type '{other}' (must be 'trilinear' or 'nearest')"),
+            ))
+        }
+    };
+    let wrap = match p.string_opt("wrap_mode")?.unwrap_or("clamp") {
+        "clamp" => Wrap::Clamp,
+        "repeat" => Wrap::Repeat,
+        "mirror" => Wrap::Mirror,
+        other => {
+            return Err(p.error_at(
+                "wrap_mode",
+                format!("invalid wrap_mode '{other}' (must be 'clamp', 'repeat' or 'mirror')"),
+            ))
+        }
+    };
+    let use_grid_bbox = p.bool("use_grid_bbox", false)?;
+    p.bool("raw", false)?;
+    p.finish()?;
+    let path = doc.resolve(filename, p.element());
+    if !path.exists() {
+        return Err(p.error_at("filename", format!("volume file '{}' not found", path.display())));
+    }
+    let grid = read_vol(&path).map_err(|m| p.error_at("filename", format!("'{}': {m}", path.display())))?;
+    if let Some((cell, c, v)) = grid.first_outside(range.0, range.1) {
+        return Err(p.error_at(
+            "filename",
+            format!(
+                "'{}': cell ({}, {}, {}) channel {c} holds {v}: '{what}' values must be finite and lie in [{}, {}]",
+                path.display(),
+                cell[0],
+                cell[1],
+                cell[2],
+                range.0,
+                range.1
+            ),
+        ));
+    }
+    let to_world = if use_grid_bbox {
+        let (lo, hi) = grid.bbox;
+        if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
+            return Err(p.error_at(
+                "use_grid_bbox",
+                format!("'{}' has an empty or invalid bounding box {lo} - {hi}", path.display()),
+            ));
+        }
+        // Mitsuba's `bbox_transform`: the file's box maps to the unit cube.
+        to_world * Affine3A::from_translation(lo) * Affine3A::from_scale(hi - lo)
+    } else {
+        to_world
+    };
+    Ok(Volume::new(VolumeData::Grid { grid: Arc::new(grid), filter, wrap }, to_world))
+}
+
+/// Largest `.vol` file haze reads (as for mesh files, `docs/robustness.md`).
+const MAX_VOLUME_FILE_BYTES: u64 = 2 << 30;
+
+/// Reads a `.vol` file: a regular file (not a device such as `/dev/zero` or a pipe) of at most
+/// [`MAX_VOLUME_FILE_BYTES`], read through that limit.
+fn read_vol(path: &std::path::Path) -> Result<Grid, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > MAX_VOLUME_FILE_BYTES {
+        return Err(format!(
+            "the file is {} bytes; haze reads .vol files of at most {MAX_VOLUME_FILE_BYTES} bytes",
+            meta.len()
+        ));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(MAX_VOLUME_FILE_BYTES).read_to_end(&mut bytes).map_err(|e| format!("cannot read: {e}"))?;
+    Grid::parse_vol(&bytes)
+}
+
+/// A volume's `to_world` as an affine map; it must be invertible and finite.
+fn affine(p: &Params, m: &Mat4) -> Result<Affine3A, LoadError> {
+    let a = Affine3A::from_mat4(*m);
+    let det = a.matrix3.determinant();
+    if !(det.is_finite() && det.abs() > 1e-12 && a.translation.is_finite()) {
+        return Err(p.error_at("to_world", "'to_world' of a volume must be finite and invertible"));
+    }
+    Ok(a)
 }
 
 /// `isotropic`, or `hg` with asymmetry `g` (Mitsuba 3 default 0.8) in (-1, 1).

@@ -26,7 +26,7 @@ pub(super) const VALUE_TAGS: &[&str] =
     &["float", "integer", "boolean", "string", "rgb", "spectrum", "point", "vector", "transform"];
 
 /// Mitsuba 3 plugin kinds haze has no plugin of at all.
-const UNSUPPORTED_KINDS: &[&str] = &["texture", "volume"];
+const UNSUPPORTED_KINDS: &[&str] = &["texture"];
 
 /// A typed parameter, e.g. `<float name="radius" value="2"/>`.
 struct Prop<'a> {
@@ -193,7 +193,7 @@ impl<'a> Params<'a> {
     pub fn spectrum_opt(&self, name: &str) -> Result<Option<Rgb>, LoadError> {
         let kind = match self.el.tag.as_str() {
             "emitter" => SpectrumKind::Emission,
-            "medium" => SpectrumKind::Unbounded,
+            "medium" | "volume" => SpectrumKind::Unbounded,
             _ => SpectrumKind::Reflectance,
         };
         self.raw(name).map(|el| spectrum_value(el, name, kind)).transpose()

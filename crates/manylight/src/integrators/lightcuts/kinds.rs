@@ -4,14 +4,14 @@
 use super::Forest;
 use crate::camera::CameraSegment;
 use crate::gather::GatherPoint;
-use crate::integrators::{connect, light_uniforms};
+use crate::integrators::{connect, light_uniforms, medium_vpl_to_point};
 use crate::lighttrace::{LightSet, VplRecord, VrlRecord};
 use crate::tree::bound::{BoundContext, BoundKind};
 use crate::tree::cone::{node_cones, node_dir_cones};
-use crate::tree::importance::ImportanceContext;
+use crate::tree::importance::{ImportanceContext, PointImportance};
 use crate::tree::lights::LightSummary;
 use crate::tree::stochastic::SampleNode;
-use crate::vpl::{point_light_to_point, sample_vpl_contribution, Vpl};
+use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::surface::sample_vrl_to_point;
 use crate::vrl::{sample_vrl_contribution, Vrl, VrlMedium};
 use haze_core::Rgb;
@@ -33,6 +33,10 @@ pub trait ClusterKind: Sized + Send + Sync + 'static {
     /// formula; a kind may know its light's shape better).
     fn leaf_importance(ctx: &ImportanceContext, node: &SampleNode, _light: &Self::Light) -> f32 {
         ctx.importance(node)
+    }
+    /// The gathering points' importance of a leaf `node` holding `light`.
+    fn leaf_point_importance(pi: &PointImportance, node: &SampleNode, _light: &Self::Light) -> f32 {
+        pi.importance(node)
     }
     /// Upper bound of node `index`'s contribution (the deterministic cut).
     fn bound(ctx: &BoundContext, forest: &Forest<Self>, index: u32) -> f32;
@@ -65,6 +69,9 @@ impl ClusterKind for Vrls {
     }
     fn leaf_importance(ctx: &ImportanceContext, node: &SampleNode, v: &Vrl) -> f32 {
         ctx.vrl_importance(v.seg.o, v.seg.d, v.seg.len, node.power)
+    }
+    fn leaf_point_importance(pi: &PointImportance, node: &SampleNode, v: &Vrl) -> f32 {
+        pi.vrl_importance(v.seg.o, v.seg.d, v.seg.len, node.power)
     }
     fn prepare(f: &mut Forest<Self>, bound: BoundKind) {
         if bound == BoundKind::Tight {
@@ -139,14 +146,6 @@ impl ClusterKind for Vpls {
         )
     }
     fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vpl: &Vpl, _u: f32) -> Rgb {
-        let phase = &media[vpl.medium as usize].phase;
-        point_light_to_point(
-            gp.p,
-            |d| gp.reflectance(d),
-            vpl.p,
-            |n| vpl.flux * phase.eval(vpl.d_in, n),
-            None,
-            |y, x| connect(scene, vpl.medium, y, x),
-        )
+        medium_vpl_to_point(scene, vpl, gp, media, None)
     }
 }

@@ -17,8 +17,8 @@ mod surface;
 pub use kinds::{ClusterKind, Vpls, Vrls};
 
 use super::{
-    connect_surface, light_uniforms, media, paths_per_pass, surface_vpls, ManyLightSettings,
-    SURFACE_VPL_STREAM,
+    light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment, surface_vpls,
+    ManyLightSettings,
 };
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
@@ -27,13 +27,13 @@ use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
 use crate::tree::cone::{DirCone, LineCone};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
-use crate::tree::importance::ImportanceContext;
+use crate::tree::importance::{ImportanceContext, PointImportance};
 use crate::tree::lights::LightSummary;
 use crate::tree::stochastic::{
     stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
 };
 use crate::tree::{LightTree, Node};
-use crate::vpl::{point_light_to_point, sample_point_light_to_segment, SurfaceVpl};
+use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
@@ -43,7 +43,7 @@ use std::cell::RefCell;
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-use surface::{sampled_sum, surface_vpl_weight, PowerSampler};
+use surface::surface_vpl_summary;
 
 /// Which tree builder to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,10 +135,11 @@ pub struct LightcutPass<K: ClusterKind> {
     /// The phase every medium shares, if one (for the tight bound's light-side phase).
     light_phase: Option<haze_core::Phase>,
     surface_vpls: Vec<SurfaceVpl>,
-    /// Surface VPLs by flux, for camera segments.
-    surface_sampler: PowerSampler,
-    /// Every light (tree 0, tree 1, surface VPLs, in that order) by flux, for gathering points.
-    point_sampler: PowerSampler,
+    /// The surface VPLs' tree (leaves index `surface_vpls`), cut stochastically for camera
+    /// segments and gathering points.
+    surface_tree: SampleTree,
+    /// Mean extinction of the scene's media (the gathering points' importance).
+    sigma_mean: f32,
 }
 
 impl<K: ClusterKind> LightcutsIntegrator<K> {
@@ -164,10 +165,11 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         };
         let mut forest =
             Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new(), sample: SampleTree::default() };
-        match self.settings.strategy {
-            CutStrategy::Bound => K::prepare(&mut forest, self.settings.bound),
-            CutStrategy::Stochastic => forest.sample = SampleTree::new(&forest.tree),
+        if self.settings.strategy == CutStrategy::Bound {
+            K::prepare(&mut forest, self.settings.bound);
         }
+        // Gathering points cut every tree stochastically, whatever the camera segments use.
+        forest.sample = SampleTree::new(&forest.tree);
         forest
     }
 
@@ -252,12 +254,22 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let surface_vpls = surface_vpls(&set);
         let n = a.len() + b.len() + surface_vpls.len();
         let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
-        let surface_sampler = PowerSampler::new(surface_vpls.iter().map(surface_vpl_weight));
-        // In the trees' light order (the builders may reorder the lights).
-        let tree_weights =
-            forests.iter().flat_map(|f| f.lights.iter().map(|l| K::summary(l, &media).intensity));
-        let point_sampler =
-            PowerSampler::new(tree_weights.chain(surface_vpls.iter().map(surface_vpl_weight)));
+        let surface_tree = {
+            let summaries: Vec<LightSummary> = surface_vpls.iter().map(surface_vpl_summary).collect();
+            let tree = match self.settings.builder {
+                Builder::Agglomerative => build_agglomerative(
+                    &summaries,
+                    &BuildSettings { seed: tree_seed ^ 2, ..self.settings.build },
+                ),
+                Builder::MedianSplit => build_median_split(&summaries, tree_seed ^ 2),
+            };
+            SampleTree::new(&tree)
+        };
+        let sigma_mean = if media.is_empty() {
+            0.0
+        } else {
+            media.iter().map(|m| m.sigma_t.mean()).sum::<f32>() / media.len() as f32
+        };
         self.stats.trace_ns.fetch_add((t1 - t0).as_nanos() as u64, Ordering::Relaxed);
         self.stats.build_ns.fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
         self.stats.lights.fetch_add(n as u64, Ordering::Relaxed);
@@ -284,8 +296,8 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
             sigma_t_min,
             light_phase,
             surface_vpls,
-            surface_sampler,
-            point_sampler,
+            surface_tree,
+            sigma_mean,
         }
     }
 
@@ -487,63 +499,117 @@ struct LightcutGather<'a, K: ClusterKind> {
 /// Separates the numbers of a sampled light's further joint samples (`light_samples`).
 const SAMPLE_STREAM: u64 = 0x3c6e_f372_fe94_f82b;
 
-/// Separates the power-sampling numbers from the lights' own (`light_uniforms`).
-const POWER_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;
+/// Separate the descents of the surface VPL tree for camera segments and of the trees for
+/// gathering points from each other and from the lights' own numbers (`light_uniforms`).
+const SURFACE_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;
+const POINT_STREAM: u64 = 0x51ed_2705_a3c1_9e4d;
 
 impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
     fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
         let (scene, pass) = (self.scene, self.pass);
         let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g));
-        let k = self.integrator.settings.stochastic.cut_size.max(1) as usize;
         let cam_medium = &pass.media[cs.medium as usize];
-        let surface = sampled_sum(
-            &pass.surface_sampler,
-            k,
-            |j| light_uniforms(key ^ POWER_STREAM, j as u32).x,
-            |i| {
-                let vpl = &pass.surface_vpls[i];
-                let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-                sample_point_light_to_segment(
-                    &cs.seg,
-                    cam_medium,
-                    vpl.p,
-                    |w| vpl.intensity(bsdf, w),
-                    light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
-                    None,
-                    |_, x| connect_surface(scene, vpl, x),
-                )
-            },
-        );
+        let ctx = ImportanceContext::new(cs.seg, cam_medium);
+        let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_STREAM, |i| {
+            surface_vpl_to_segment(
+                scene,
+                &pass.surface_vpls[i as usize],
+                i as usize,
+                cs,
+                cam_medium,
+                key,
+                None,
+            )
+        });
         [cuts[0], cuts[1] + surface]
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
-        let k = self.integrator.settings.stochastic.cut_size.max(1) as usize;
-        let (n0, n1) = (pass.forests[0].lights.len(), pass.forests[1].lights.len());
-        sampled_sum(
-            &pass.point_sampler,
-            k,
-            |j| light_uniforms(key ^ POWER_STREAM, j as u32).x,
-            |i| {
-                let u = light_uniforms(key, i as u32).x;
-                if i < n0 {
-                    K::to_point(scene, gp, &pass.media, &pass.forests[0].lights[i], u)
-                } else if i < n0 + n1 {
-                    K::to_point(scene, gp, &pass.media, &pass.forests[1].lights[i - n0], u)
+        let pi = PointImportance::new(gp.p, gp.n, pass.sigma_mean);
+        // One tree per gathering point, picked like a descent's first step over the three
+        // roots (importance mixed with the power share), then cut: one light evaluation per
+        // point, as many as a segment's single tree.
+        let roots = [&pass.forests[0].sample, &pass.forests[1].sample, &pass.surface_tree];
+        let share = self.integrator.settings.stochastic.power_share;
+        let (mut imp, mut pow) = ([0.0f32; 3], [0.0f32; 3]);
+        for (g, tree) in roots.iter().enumerate() {
+            if !tree.is_empty() {
+                let root = tree.node(0);
+                imp[g] = pi.importance(root);
+                pow[g] = root.power[0] + root.power[1] + root.power[2];
+            }
+        }
+        let (imp_sum, pow_sum) = (imp.iter().sum::<f32>(), pow.iter().sum::<f32>());
+        if !(pow_sum > 0.0 && pow_sum.is_finite()) {
+            return Rgb::ZERO;
+        }
+        let prob = |g: usize| {
+            let by_power = pow[g] / pow_sum;
+            if imp_sum > 0.0 && imp_sum.is_finite() {
+                (1.0 - share) * imp[g] / imp_sum + share * by_power
+            } else {
+                by_power
+            }
+        };
+        let u = light_uniforms(key ^ POINT_STREAM, 0).x;
+        // Falls back to the last tree with power if rounding leaves `u` above the sum.
+        let mut g = pow.iter().rposition(|&p| p > 0.0).unwrap_or(2);
+        let mut acc = 0.0;
+        for (j, &power) in pow.iter().enumerate() {
+            acc += prob(j);
+            if u < acc && power > 0.0 {
+                g = j;
+                break;
+            }
+        }
+        let p_tree = prob(g);
+        if p_tree <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let stream = POINT_STREAM.wrapping_mul(g as u64 + 2);
+        let sum = if g < 2 {
+            let forest = &pass.forests[g];
+            let importance = |n: &SampleNode| {
+                if n.is_leaf() {
+                    K::leaf_point_importance(&pi, n, &forest.lights[n.light() as usize])
                 } else {
-                    let vpl = &pass.surface_vpls[i - n0 - n1];
-                    let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-                    point_light_to_point(
-                        gp.p,
-                        |d| gp.reflectance(d),
-                        vpl.p,
-                        |w| vpl.intensity(bsdf, w),
-                        None,
-                        |_, x| connect_surface(scene, vpl, x),
-                    )
+                    pi.importance(n)
                 }
-            },
-        )
+            };
+            self.cut_sum(&forest.sample, &importance, key ^ stream, |i| {
+                let u = light_uniforms(key ^ stream, i).x;
+                K::to_point(scene, gp, &pass.media, &forest.lights[i as usize], u)
+            })
+        } else {
+            self.cut_sum(&pass.surface_tree, &|n| pi.importance(n), key ^ stream, |i| {
+                surface_vpl_to_point(scene, &pass.surface_vpls[i as usize], gp, None)
+            })
+        };
+        sum * (1.0 / p_tree)
+    }
+}
+
+impl<K: ClusterKind> LightcutGather<'_, K> {
+    /// The stochastic cut's estimate (`cut_size` nodes, one light each) of the sum of `eval`
+    /// over the lights of `tree`, descending with `importance` and the numbers of `key`.
+    fn cut_sum(
+        &self,
+        tree: &SampleTree,
+        importance: &impl Fn(&SampleNode) -> f32,
+        key: u64,
+        mut eval: impl FnMut(u32) -> Rgb,
+    ) -> Rgb {
+        if tree.is_empty() {
+            return Rgb::ZERO;
+        }
+        let settings = &self.integrator.settings.stochastic;
+        STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
+            let mut sum = Rgb::ZERO;
+            stochastic_cut(tree, importance, settings, key, scratch, |light, prob| {
+                sum += eval(light) * (1.0 / prob);
+            });
+            sum
+        })
     }
 }

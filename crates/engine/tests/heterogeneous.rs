@@ -1,0 +1,69 @@
+//! Heterogeneous media and the many-light methods (issue 15): until their estimators handle
+//! spatially varying coefficients, `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` (and
+//! light tracing for the Python binding) refuse such a scene with an error naming the method
+//! and the medium, rather than rendering it wrong; `volpath` renders it.
+
+use haze_engine::lights::trace_lights;
+use haze_engine::options::{resolve, Spelling};
+use haze_engine::{Method, MethodKind};
+use haze_render::progressive::RenderSettings;
+use haze_scene::{load_str, LoadOptions, Scene};
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+fn scene(medium_type: &str) -> Scene {
+    let medium = if medium_type == "heterogeneous" {
+        r#"<medium id="plume" type="heterogeneous"><volume name="sigma_t" type="constvolume">
+             <float name="value" value="2"/></volume></medium>"#
+    } else {
+        r#"<medium id="plume" type="homogeneous"><float name="sigma_t" value="2"/></medium>"#
+    };
+    let xml = format!(
+        r#"<scene version="3.0.0">
+        <sensor type="perspective"><transform name="to_world"><lookat origin="0.5, 0.5, 4" target="0.5, 0.5, 0.5" up="0, 1, 0"/></transform>
+          <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+        <emitter type="point"><point name="position" value="0.5, 3, 0.5"/><rgb name="intensity" value="5"/></emitter>
+        {medium}
+        <shape type="cube"><bsdf type="null"/><ref name="interior" id="plume"/>
+          <transform name="to_world"><scale value="0.5"/><translate value="0.5 0.5 0.5"/></transform></shape>
+        </scene>"#
+    );
+    load_str(&xml, Path::new("plume.xml"), Path::new("."), &LoadOptions::default()).unwrap()
+}
+
+#[test]
+fn many_light_methods_refuse_heterogeneous_media() {
+    let hetero = scene("heterogeneous");
+    let homo = scene("homogeneous");
+    for kind in [MethodKind::Vrl, MethodKind::Vpl, MethodKind::VrlLightcuts, MethodKind::VplLightcuts] {
+        let options = resolve(kind, &[], Spelling::Flag).unwrap();
+        let e = match Method::build(&hetero, kind, &options.method, 0) {
+            Ok(_) => panic!("{kind} accepted a heterogeneous medium"),
+            Err(e) => e.to_string(),
+        };
+        for want in
+            [&format!("integrator '{kind}'") as &str, "medium 'plume'", "heterogeneous", "use volpath"]
+        {
+            assert!(e.contains(want), "{kind}: `{e}` lacks `{want}`");
+        }
+        // The same scene with a homogeneous medium builds: the refusal is about the medium.
+        assert!(Method::build(&homo, kind, &options.method, 0).is_ok(), "{kind}");
+    }
+    let e = match trace_lights(&hetero, 10, 0, 0) {
+        Ok(_) => panic!("light tracing accepted a heterogeneous medium"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("medium 'plume'"), "{e}");
+}
+
+#[test]
+fn volpath_renders_heterogeneous_media() {
+    let scene = scene("heterogeneous");
+    let options = resolve(MethodKind::VolPath, &[], Spelling::Flag).unwrap();
+    let method = Method::build(&scene, MethodKind::VolPath, &options.method, 0).unwrap();
+    let settings = RenderSettings { spp: 16, ..Default::default() };
+    let out = method.render(&scene, &settings, &AtomicBool::new(false), |_| {});
+    assert_eq!(out.invalid_samples, 0);
+    let mean = out.film.mean(None);
+    assert!(mean.iter().all(|v| v.is_finite()) && mean.iter().any(|v| *v > 0.0));
+}
