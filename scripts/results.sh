@@ -7,6 +7,9 @@
 #     REF_METHOD=volpath gives the old references),
 #   - the validation scenes (tests/data/validation) against their Mitsuba 3 references,
 #   - the benchmark scenes at 640x360 (WIDE_*), where light tracing amortises over more pixels;
+#   - whole images with lit surfaces and glass (WHOLE_*): scenes/glass-beam.xml (320x240) and
+#     tests/data/glass-ball-room.xml (256x192), against REF_METHOD references (volpath cannot
+#     find the spot's caustic through the ball, so it cannot be the reference there);
 # scripts/aggregate-results.py turns the runs of one scene into one table: median RMSE over the
 # seeds with its min-max, and RMSE ratios computed per seed (same run, same machine load).
 # Methods: volpath; brute-force vrl at two light counts; the paper's deterministic cut
@@ -35,15 +38,18 @@ SEEDS=${SEEDS:-"0 1 2"}
 REF_METHOD=${REF_METHOD:-vrl_lightcuts}
 OUT=${OUT:-target/results}
 SCENES=${SCENES:-"smoke-room spot-beam fog-shadow"}
-PARTS=${PARTS:-"bench validation wide"}
+PARTS=${PARTS:-"bench validation wide whole"}
+WHOLE_REF_TIME=${WHOLE_REF_TIME:-300}
+WHOLE_BUDGET=${WHOLE_BUDGET:-20}
 # Two groups per run, separated by "--": one sample per pass, then each method's auto samples per
 # pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
   vrl_lightcuts:1000 vrl_lightcuts:1000,light_samples=4 vrl_lightcuts:10000 vpl_lightcuts:10000)
 WIDE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000)
+WHOLE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vpl_lightcuts:10000)
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
-DOC=docs/results.md
+DOC=${DOC:-docs/results.md}
 
 # compare NAME SCENE REFERENCE BUDGET "DEFINES" METHOD... [-- METHOD...]: runs every seed into
 # $OUT/NAME (the methods before "--" with one sample per pass, those after it with their auto
@@ -141,7 +147,19 @@ for part in $PARTS; do
           "$s" "$WIDE_BUDGET" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
       done
       ;;
-    *) echo "unknown part '$part' (bench, validation, wide)" >&2; exit 1 ;;
+    whole)
+      for s in glass-beam glass-ball-room; do
+        if [ "$s" = glass-beam ]; then scene=scenes/glass-beam.xml defines="" size=320x240
+        else scene=tests/data/glass-ball-room.xml defines="-D res=256 -D res_y=192" size=256x192; fi
+        ref=$OUT/whole/$s/reference.exr
+        reference "$scene" "$ref" "$WHOLE_REF_TIME" "$defines"
+        start_load=$(load)
+        table=$(compare "whole/$s" "$scene" "$ref" "$WHOLE_BUDGET" "$defines" "${WHOLE_METHODS[@]}")
+        printf '\n## %s (whole image), %s, %s s per method\n\n`%s`, `%s` reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
+          "$s" "$size" "$WHOLE_BUDGET" "$scene" "$REF_METHOD" "$WHOLE_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      done
+      ;;
+    *) echo "unknown part '$part' (bench, validation, wide, whole)" >&2; exit 1 ;;
   esac
 done
 
