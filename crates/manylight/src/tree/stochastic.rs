@@ -244,22 +244,29 @@ pub fn power_moments(tree: &LightTree) -> Vec<(Vec3, f32)> {
 
 /// Scalar power of a node (sum of channels).
 #[inline]
-fn power(node: &SampleNode) -> f32 {
+pub fn power(node: &SampleNode) -> f32 {
     node.power[0] + node.power[1] + node.power[2]
 }
 
-/// Probability of going to the left child (module docs). Falls back to the power share where
-/// the importances are all zero or not finite, and to 1/2 where the powers are too.
+/// The probability of one choice among several (module docs): `(1 - a) I / sum_I + a
+/// by_power`, with `by_power` the choice's share of the power; `by_power` alone where the
+/// importances are all zero or not finite.
+#[inline]
+pub fn mixed_probability(i: f32, i_sum: f32, by_power: f32, share: f32) -> f32 {
+    if i_sum > 0.0 && i_sum.is_finite() {
+        (1.0 - share) * (i / i_sum) + share * by_power
+    } else {
+        by_power
+    }
+}
+
+/// Probability of going to the left child ([`mixed_probability`]); 1/2 where the powers are
+/// all zero or not finite too.
 #[inline]
 pub fn left_probability(left: &SampleNode, right: &SampleNode, i_left: f32, i_right: f32, share: f32) -> f32 {
     let (pl, pr) = (power(left), power(right));
     let by_power = if pl + pr > 0.0 && (pl + pr).is_finite() { pl / (pl + pr) } else { 0.5 };
-    let sum = i_left + i_right;
-    if sum > 0.0 && sum.is_finite() {
-        (1.0 - share) * (i_left / sum) + share * by_power
-    } else {
-        by_power
-    }
+    mixed_probability(i_left, i_left + i_right, by_power, share)
 }
 
 /// A frontier node keyed by its importance.

@@ -30,7 +30,7 @@ use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStat
 use crate::tree::importance::{ImportanceContext, PointImportance};
 use crate::tree::lights::LightSummary;
 use crate::tree::stochastic::{
-    stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
+    mixed_probability, power, stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
 };
 use crate::tree::{LightTree, Node};
 use crate::vpl::SurfaceVpl;
@@ -153,16 +153,22 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         Ok(LightcutsIntegrator { ml, settings, paths, stats: Stats::default(), kind: PhantomData })
     }
 
+    /// The light tree over `summaries` with the configured builder.
+    fn build_tree(&self, summaries: &[LightSummary], seed: u64) -> LightTree {
+        match self.settings.builder {
+            Builder::Agglomerative => {
+                build_agglomerative(summaries, &BuildSettings { seed, ..self.settings.build })
+            }
+            Builder::MedianSplit => build_median_split(summaries, seed),
+        }
+    }
+
     fn build(&self, lights: Vec<K::Light>, media: &[VrlMedium], seed: u64) -> Forest<K> {
         let summaries: Vec<LightSummary> = {
             use rayon::prelude::*;
             lights.par_iter().map(|l| K::summary(l, media)).collect()
         };
-        let build = BuildSettings { seed, ..self.settings.build };
-        let tree = match self.settings.builder {
-            Builder::Agglomerative => build_agglomerative(&summaries, &build),
-            Builder::MedianSplit => build_median_split(&summaries, seed),
-        };
+        let tree = self.build_tree(&summaries, seed);
         let mut forest =
             Forest { lights, tree, cones: Vec::new(), dir_cones: Vec::new(), sample: SampleTree::default() };
         if self.settings.strategy == CutStrategy::Bound {
@@ -256,14 +262,7 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
         let surface_tree = {
             let summaries: Vec<LightSummary> = surface_vpls.iter().map(surface_vpl_summary).collect();
-            let tree = match self.settings.builder {
-                Builder::Agglomerative => build_agglomerative(
-                    &summaries,
-                    &BuildSettings { seed: tree_seed ^ 2, ..self.settings.build },
-                ),
-                Builder::MedianSplit => build_median_split(&summaries, tree_seed ^ 2),
-            };
-            SampleTree::new(&tree)
+            SampleTree::new(&self.build_tree(&summaries, tree_seed ^ 2))
         };
         let sigma_mean = if media.is_empty() {
             0.0
@@ -537,21 +536,14 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
             if !tree.is_empty() {
                 let root = tree.node(0);
                 imp[g] = pi.importance(root);
-                pow[g] = root.power[0] + root.power[1] + root.power[2];
+                pow[g] = power(root);
             }
         }
         let (imp_sum, pow_sum) = (imp.iter().sum::<f32>(), pow.iter().sum::<f32>());
         if !(pow_sum > 0.0 && pow_sum.is_finite()) {
             return Rgb::ZERO;
         }
-        let prob = |g: usize| {
-            let by_power = pow[g] / pow_sum;
-            if imp_sum > 0.0 && imp_sum.is_finite() {
-                (1.0 - share) * imp[g] / imp_sum + share * by_power
-            } else {
-                by_power
-            }
-        };
+        let prob = |g: usize| mixed_probability(imp[g], imp_sum, pow[g] / pow_sum, share);
         let u = light_uniforms(key ^ POINT_STREAM, 0).x;
         // Falls back to the last tree with power if rounding leaves `u` above the sum.
         let mut g = pow.iter().rposition(|&p| p > 0.0).unwrap_or(2);

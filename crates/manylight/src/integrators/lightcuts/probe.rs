@@ -16,7 +16,7 @@
 
 use super::{ClusterKind, Forest, LightcutPass};
 use crate::camera::CameraSegment;
-use crate::tree::stochastic::{light_probabilities, SampleNode};
+use crate::tree::stochastic::{light_probabilities, power as tree_power, SampleNode};
 use haze_core::rng::mix64;
 use haze_scene::Scene;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -122,7 +122,7 @@ pub(super) fn record<K: ClusterKind>(
         let node = forest.sample.node(id);
         if node.is_leaf() {
             leaves[node.light() as usize] = importance(node) as f64;
-            power[node.light() as usize] = (node.power[0] + node.power[1] + node.power[2]) as f64;
+            power[node.light() as usize] = tree_power(node) as f64;
         } else {
             stack.extend(node.children());
         }
