@@ -71,6 +71,27 @@ pub struct Grid {
 pub const VOL_HEADER_BYTES: usize = 48;
 
 impl Grid {
+    /// A grid whose cell `(x, y, z)` channel `c` holds `f(x, y, z, c)`, in the `.vol` order
+    /// (x fastest, then y, then z; channels interleaved).
+    pub fn from_fn(
+        res: [u32; 3],
+        channels: u32,
+        bbox: (Vec3, Vec3),
+        f: impl Fn(u32, u32, u32, u32) -> f32,
+    ) -> Grid {
+        let mut data = Vec::with_capacity((res[0] * res[1] * res[2] * channels) as usize);
+        for z in 0..res[2] {
+            for y in 0..res[1] {
+                for x in 0..res[0] {
+                    for c in 0..channels {
+                        data.push(f(x, y, z, c));
+                    }
+                }
+            }
+        }
+        Grid { res, channels, data, bbox }
+    }
+
     /// Reads a Mitsuba `.vol` file (format version 3, encoding 1 = float32, little endian;
     /// `docs/mitsuba-compat.md` has the layout). Errors name the file and what is wrong.
     pub fn read_vol(path: &Path) -> Result<Grid, String> {
@@ -337,17 +358,7 @@ mod tests {
     use super::*;
 
     fn grid(res: [u32; 3], channels: u32, f: impl Fn(u32, u32, u32, u32) -> f32) -> Grid {
-        let mut data = Vec::new();
-        for z in 0..res[2] {
-            for y in 0..res[1] {
-                for x in 0..res[0] {
-                    for c in 0..channels {
-                        data.push(f(x, y, z, c));
-                    }
-                }
-            }
-        }
-        Grid { res, channels, data, bbox: (Vec3::ZERO, Vec3::ONE) }
+        Grid::from_fn(res, channels, (Vec3::ZERO, Vec3::ONE), f)
     }
 
     fn volume(g: Grid, filter: Filter, wrap: Wrap) -> Volume {

@@ -17,17 +17,7 @@ fn dir(name: &str) -> PathBuf {
 
 /// A grid whose cell `(x, y, z)` channel `c` holds `f(x, y, z, c)`.
 fn grid(res: [u32; 3], channels: u32, f: impl Fn(u32, u32, u32, u32) -> f32) -> Grid {
-    let mut data = Vec::new();
-    for z in 0..res[2] {
-        for y in 0..res[1] {
-            for x in 0..res[0] {
-                for c in 0..channels {
-                    data.push(f(x, y, z, c));
-                }
-            }
-        }
-    }
-    Grid { res, channels, data, bbox: (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 4.0, 3.0)) }
+    Grid::from_fn(res, channels, (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 4.0, 3.0)), f)
 }
 
 /// A scene with a medium whose body is `medium` (line 4 onwards), written to `d/scene.xml`.
