@@ -106,9 +106,16 @@ def main():
     rot.transform = vdb.createLinearTransform([[c * VOXEL, s * VOXEL, 0, 0], [-s * VOXEL, c * VOXEL, 0, 0], [0, 0, VOXEL, 0], [0, 0, 0, 1]])
     vdb.write(os.path.join(out, "rotated.vdb"), grids=[rot])
     # A level set (signed distance, background = the narrow band's width): not a fog volume.
-    sphere = vdb.createLevelSetSphere(1.0, voxelSize=0.25)
+    sphere = vdb.createLevelSetSphere(0.5, (1.0, 1.0, 1.0), 0.25, 1.5)
     sphere.name = "density"
     vdb.write(os.path.join(out, "levelset.vdb"), grids=[sphere])
+    # Active tiles: a 16^3 block filled at once is stored as eight 8^3 tiles (no voxels),
+    # beside one voxel; voxel size 1, no translation (a UniformScaleMap).
+    tiles = vdb.FloatGrid()
+    tiles.fill((0, 0, 0), (15, 15, 15), 0.5, active=True)
+    tiles.getAccessor().setValueOn((20, 3, 3), 1.0)
+    tiles.name = "density"
+    vdb.write(os.path.join(out, "tiles.vdb"), grids=[tiles])
     print(f"wrote {out}: smoke.vol box {lo} - {hi}")
 
 

@@ -101,6 +101,29 @@ fn nearest_filter() {
     assert!((h.sigma_t(p)[0] - 2.0 * generated(2, 5, 3)).abs() < 1e-5);
 }
 
+/// Active tiles hold their value over all their voxels (`tiles.vdb`: a 16^3 block stored as
+/// eight 8^3 tiles, voxel size 1, no translation, and one voxel at (20, 3, 3)).
+#[test]
+fn tiles_fill_their_voxels() {
+    let xml = std::fs::read_to_string(data("smoke-vdb.xml"))
+        .unwrap()
+        .replace("\"smoke.vdb\"", "\"tiles.vdb\"")
+        .replace("<translate x=\"0.5\"/>", "");
+    let h = medium(&load_str(&xml, &data("smoke-vdb.xml"), &data(""), &LoadOptions::default()).unwrap());
+    // The active box (0, 0, 0) - (20, 15, 15), padded by one voxel, in world units.
+    assert_eq!(h.sigma_t.bbox, (Vec3::splat(-1.5), Vec3::new(21.5, 16.5, 16.5)));
+    let at = |i: f32, j: f32, k: f32| h.sigma_t(Vec3::new(i, j, k))[0] / 2.0;
+    // (To float precision: world -> cell goes through the inverse of a scale by 23.)
+    let near = |a: f32, b: f32| (a - b).abs() < 1e-5;
+    for p in [(0.0, 0.0, 0.0), (7.0, 8.0, 15.0), (15.0, 15.0, 15.0), (3.5, 12.25, 9.0)] {
+        assert!(near(at(p.0, p.1, p.2), 0.5), "{p:?}: {}", at(p.0, p.1, p.2));
+    }
+    assert!(near(at(20.0, 3.0, 3.0), 1.0));
+    assert!(near(at(18.0, 3.0, 3.0), 0.0));
+    assert!(near(at(16.0, 3.0, 3.0), 0.0));
+    assert!(near(at(15.5, 3.0, 3.0), 0.25));
+}
+
 /// A fresh directory for one test's files.
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("haze-vdb-{}-{name}", std::process::id()));
