@@ -109,6 +109,14 @@ def main():
     sphere = vdb.createLevelSetSphere(0.5, (1.0, 1.0, 1.0), 0.25, 1.5)
     sphere.name = "density"
     vdb.write(os.path.join(out, "levelset.vdb"), grids=[sphere])
+    # Non-uniform voxels (a ScaleTranslateMap): (1/4, 1/2, 1/8), translated by (1, 2, 3).
+    scaled = float_grid(a)
+    scaled.transform = vdb.createLinearTransform([[0.25, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 0.125, 0], [1, 2, 3, 1]])
+    vdb.write(os.path.join(out, "scaled.vdb"), grids=[scaled])
+    # Saved as half floats (which vdb-rs 0.6 misreads: an error).
+    half = float_grid(a)
+    half["is_saved_as_half_float"] = True
+    vdb.write(os.path.join(out, "half.vdb"), grids=[half])
     # Active tiles: a 16^3 block filled at once is stored as eight 8^3 tiles (no voxels),
     # beside one voxel; voxel size 1, no translation (a UniformScaleMap).
     tiles = vdb.FloatGrid()

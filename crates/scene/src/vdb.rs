@@ -186,6 +186,15 @@ pub fn parse_vdb(bytes: &[u8], name: &str) -> Result<VdbGrid, VdbError> {
             desc.grid_type
         )));
     }
+    // vdb-rs 0.6 misreads half-float grids: OpenVDB writes nothing (not even a length) for an
+    // empty array of half values, and vdb-rs reads a length there and loses its place (its
+    // development version skips empty arrays of every type, which breaks float grids instead).
+    if desc.grid_type.ends_with("_HalfFloat") || desc.meta_data.is_half_float() {
+        return Err(VdbError::Grid(format!(
+            "grid '{name}' is saved as 16-bit half floats, which haze's OpenVDB reader (vdb-rs 0.6) cannot read: \
+             re-save it with 32-bit floats (e.g. Blender's fluid cache precision 'Full')"
+        )));
+    }
     if !desc.instance_parent.is_empty() {
         return Err(VdbError::Grid(format!(
             "grid '{name}' is an instance of grid '{}' (shares its tree); haze does not read instanced grids",

@@ -124,6 +124,28 @@ fn tiles_fill_their_voxels() {
     assert!(near(at(15.5, 3.0, 3.0), 0.25));
 }
 
+/// Non-uniform voxels (1/4, 1/2, 1/8) and translation (1, 2, 3) (`scaled.vdb`, a
+/// `ScaleTranslateMap`): each voxel centre holds its value.
+#[test]
+fn non_uniform_voxels() {
+    let xml = std::fs::read_to_string(data("smoke-vdb.xml"))
+        .unwrap()
+        .replace("\"smoke.vdb\"", "\"scaled.vdb\"")
+        .replace("<translate x=\"0.5\"/>", "");
+    let h = medium(&load_str(&xml, &data("smoke-vdb.xml"), &data(""), &LoadOptions::default()).unwrap());
+    let voxel = Vec3::new(0.25, 0.5, 0.125);
+    let world =
+        |i: i32, j: i32, k: i32| Vec3::new(1.0, 2.0, 3.0) + voxel * Vec3::new(i as f32, j as f32, k as f32);
+    let lo = world(-3, 2, 1) - 1.5 * voxel;
+    let hi = world(4, 7, 5) + 1.5 * voxel;
+    assert!((h.sigma_t.bbox.0 - lo).abs().max_element() < 1e-6, "{:?}", h.sigma_t.bbox);
+    assert!((h.sigma_t.bbox.1 - hi).abs().max_element() < 1e-6, "{:?}", h.sigma_t.bbox);
+    for (i, j, k) in [(-3, 7, 1), (4, 2, 5), (2, 5, 3), (0, 3, 2), (1, 2, 4)] {
+        let (got, want) = (h.sigma_t(world(i, j, k))[0] / 2.0, generated(i, j, k));
+        assert!((got - want).abs() <= 1e-5, "voxel ({i}, {j}, {k}): {got}, want {want}");
+    }
+}
+
 /// A fresh directory for one test's files.
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("haze-vdb-{}-{name}", std::process::id()));
@@ -242,6 +264,12 @@ fn bad_vdb_files() {
         Some(&bytes("levelset.vdb")),
         &volume("sigma_t", "grid.vdb", "<string name=\"grid\" value=\"density\"/>"),
         &[":7:", GRID, "grid 'density' is a level set"],
+    );
+    fails(
+        "half-floats",
+        Some(&bytes("half.vdb")),
+        &sigma_t,
+        &[":6:", FILENAME, "grid 'density' is saved as 16-bit half floats", "re-save it with 32-bit floats"],
     );
     fails("missing-file", None, &sigma_t, &[":6:", FILENAME, "grid.vdb' not found"]);
 }
