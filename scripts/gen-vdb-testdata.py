@@ -117,6 +117,16 @@ def main():
     half = float_grid(a)
     half["is_saved_as_half_float"] = True
     vdb.write(os.path.join(out, "half.vdb"), grids=[half])
+    # A sparse grid too large to densify: two voxels 4000 apart (4003^3 cells with the padding).
+    sparse = vdb.FloatGrid()
+    sparse.getAccessor().setValueOn((0, 0, 0), 1.0)
+    sparse.getAccessor().setValueOn((4000, 4000, 4000), 1.0)
+    sparse.name = "density"
+    vdb.write(os.path.join(out, "sparse.vdb"), grids=[sparse])
+    # An inactive voxel holding a non-zero value (not a fog volume's background).
+    inactive = float_grid(a)
+    inactive.getAccessor().setValueOff((ORIGIN[0] + 1, ORIGIN[1] + 0, ORIGIN[2] + 2), 0.3)
+    vdb.write(os.path.join(out, "inactive.vdb"), grids=[inactive])
     # Active tiles: a 16^3 block filled at once is stored as eight 8^3 tiles (no voxels),
     # beside one voxel; voxel size 1, no translation (a UniformScaleMap).
     tiles = vdb.FloatGrid()

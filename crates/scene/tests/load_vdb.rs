@@ -271,6 +271,22 @@ fn bad_vdb_files() {
         &sigma_t,
         &[":6:", FILENAME, "grid 'density' is saved as 16-bit half floats", "re-save it with 32-bit floats"],
     );
+    fails(
+        "too-sparse",
+        Some(&bytes("sparse.vdb")),
+        &sigma_t,
+        &[
+            ":6:",
+            FILENAME,
+            "its active voxels span 4003 x 4003 x 4003 cells with the padding, more than the 536870912",
+        ],
+    );
+    fails(
+        "inactive-value",
+        Some(&bytes("inactive.vdb")),
+        &sigma_t,
+        &[":6:", FILENAME, "inactive value 0.3 at voxel (-2, 2, 3)", "fog volumes"],
+    );
     fails("missing-file", None, &sigma_t, &[":6:", FILENAME, "grid.vdb' not found"]);
 }
 
