@@ -15,14 +15,18 @@
 //!   medium) holds everything a lookup can see; `wrap_mode` then changes nothing, so it is
 //!   refused for `.vdb` files, as is `use_grid_bbox` (the file's transform places the grid).
 //!
-//! `vdb-rs` 0.6 panics on some inputs (a transform map it does not know, e.g. the `AffineMap`
-//! of a rotated grid; multi-buffer trees; very old files) and mis-checks the magic number, so
-//! [`read_vdb`] checks the header itself and runs the crate inside `catch_unwind` (with a
-//! panic hook that keeps those panics quiet): every bad file is an error, never a crash.
-//! Known gap: a corrupt (not truncated) file can announce a huge block that vdb-rs allocates
-//! before reading it; that aborts like any failed allocation. It also ignores tiles at the root level and the root's
-//! background value, so haze checks the inactive values it can see (they must be 0) and that
-//! the active voxels it found span the bounding box the file records.
+//! What `vdb-rs` 0.6 does not do, and how haze copes:
+//! - it panics on some inputs (a transform map it does not know, e.g. the `AffineMap` of a
+//!   rotated grid; multi-buffer trees; very old files) and mis-checks the magic number, so
+//!   [`read_vdb`] checks the header itself and runs the crate inside `catch_unwind` (with a
+//!   panic hook that keeps those panics quiet): such files are errors, not crashes;
+//! - it misreads grids saved as half floats (see [`parse_vdb`]): refused with an error;
+//! - it ignores tiles at the root level and the root's background value, so haze checks the
+//!   inactive values it can see (they must be 0) and that the active voxels it found span the
+//!   bounding box the file records;
+//! - known gap: a corrupt (not truncated) file can announce a huge block, which vdb-rs
+//!   allocates before reading it; that aborts like any failed allocation (seen when fuzzing
+//!   with random byte changes; truncated files are errors).
 
 use crate::volume::Grid;
 use glam::{Affine3A, DVec3, Mat3A, Vec3};
