@@ -191,23 +191,24 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
         }
     };
     let is_vdb = Path::new(filename).extension().is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
-    let wrap =
-        match p.string_opt("wrap_mode")?.unwrap_or("clamp") {
-            _ if is_vdb && p.raw("wrap_mode").is_some() => return Err(p.error_at(
+    if is_vdb && p.raw("wrap_mode").is_some() {
+        return Err(p.error_at(
+            "wrap_mode",
+            "'wrap_mode' does not apply to a .vdb grid: outside its active voxels a .vdb grid is its background, 0 \
+             (docs/openvdb.md)",
+        ));
+    }
+    let wrap = match p.string_opt("wrap_mode")?.unwrap_or("clamp") {
+        "clamp" => Wrap::Clamp,
+        "repeat" => Wrap::Repeat,
+        "mirror" => Wrap::Mirror,
+        other => {
+            return Err(p.error_at(
                 "wrap_mode",
-                "'wrap_mode' does not apply to a .vdb grid: outside its active voxels a .vdb grid is its \
-                 background, 0 (docs/openvdb.md)",
-            )),
-            "clamp" => Wrap::Clamp,
-            "repeat" => Wrap::Repeat,
-            "mirror" => Wrap::Mirror,
-            other => {
-                return Err(p.error_at(
-                    "wrap_mode",
-                    format!("invalid wrap_mode '{other}' (must be 'clamp', 'repeat' or 'mirror')"),
-                ))
-            }
-        };
+                format!("invalid wrap_mode '{other}' (must be 'clamp', 'repeat' or 'mirror')"),
+            ))
+        }
+    };
     let use_grid_bbox = p.bool("use_grid_bbox", false)?;
     if is_vdb && p.raw("use_grid_bbox").is_some() {
         return Err(p.error_at(
