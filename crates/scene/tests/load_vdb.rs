@@ -288,6 +288,22 @@ fn bad_vdb_files() {
         &[":6:", FILENAME, "inactive value 0.3 at voxel (-2, 2, 3)", "fog volumes"],
     );
     fails("missing-file", None, &sigma_t, &[":6:", FILENAME, "grid.vdb' not found"]);
+    // A device behind a .vdb name is refused before anything is read.
+    #[cfg(unix)]
+    {
+        let d = dir("device");
+        std::os::unix::fs::symlink("/dev/zero", d.join("zero.vdb")).unwrap();
+        let xml = format!(
+            "<scene version=\"3.0.0\">\n<medium id=\"smoke\" type=\"heterogeneous\">\n{}\n</medium>\n</scene>\n",
+            volume("sigma_t", "zero.vdb", "")
+        );
+        let e = load_str(&xml, Path::new("s.xml"), &d, &LoadOptions::default())
+            .err()
+            .expect("an error")
+            .to_string();
+        assert!(e.contains("s.xml:4:") && e.contains(FILENAME) && e.contains("not a regular file"), "{e}");
+        std::fs::remove_dir_all(&d).ok();
+    }
 }
 
 #[test]
