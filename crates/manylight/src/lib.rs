@@ -11,6 +11,7 @@ pub mod integrators;
 pub mod lighttrace;
 mod memory;
 pub mod single;
+pub mod splat;
 pub mod tree;
 pub mod vpl;
 pub mod vrl;
