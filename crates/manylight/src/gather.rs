@@ -16,6 +16,7 @@ use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_render::integrators::{surface_nee, SurfaceMis};
 use haze_render::{Component, PathRadiance};
+use haze_scene::bsdf::BsdfSample;
 use haze_scene::{Bsdf, MediumId, Scene, SurfaceInteraction};
 use std::cell::RefCell;
 
@@ -53,11 +54,20 @@ pub(crate) trait Gather {
     fn splats_caustics(&self) -> bool {
         true
     }
+    /// `Some(1)`: the primary chain splits at its first two-lobe delta vertex
+    /// (`ChainEnd::Split`), the branches weighted by their lobe probabilities times this
+    /// factor; `None` only in tests that compare with the unsplit walk, other factors only in
+    /// their negative control.
+    fn split(&self) -> Option<f32> {
+        Some(1.0)
+    }
 }
 
 thread_local! {
     /// Per-thread gathering segments of the current chain: the hot loop allocates nothing.
     static CHAIN: RefCell<Vec<ChainSegment>> = RefCell::new(Vec::with_capacity(MAX_SEGMENTS));
+    /// The same for the branches after the primary chain's split (`ChainEnd::Split`).
+    static BRANCH_CHAIN: RefCell<Vec<ChainSegment>> = RefCell::new(Vec::with_capacity(MAX_SEGMENTS));
 }
 
 /// Camera-path events (delta surfaces and continuations) after which Russian roulette starts.
@@ -69,9 +79,34 @@ struct ChainSegment {
     cs: CameraSegment,
     /// The camera path had a surface event before it (its light is `surface`).
     after_surface: bool,
-    /// The camera sees it directly (`whole_path_radiance`'s `direct`): the continuation from
-    /// its points leaves area emitters behind delta chains to light tracing.
+    /// The camera sees it directly (`Walk::direct`): the continuation from its points leaves
+    /// area emitters behind delta chains to light tracing.
     direct: bool,
+    /// Already gathered (a split's prefix: gathered once, before the branches).
+    gathered: bool,
+    /// Factor of a continuation from it: the branch's lobe probability for a split's prefix,
+    /// else 1.
+    scale: f32,
+}
+
+/// The state of a camera walk between chains.
+#[derive(Clone, Copy)]
+struct Walk {
+    ray: Ray,
+    medium: Option<MediumId>,
+    beta: Rgb,
+    surface_seen: bool,
+    gathering: bool,
+    events: u32,
+    /// The camera sees the chain's end directly (no delta sample but thin sheets' straight
+    /// crossings): only the first chain, until a delta sample changes the direction.
+    direct: bool,
+    /// The continued chain after a directly seen gathering vertex: its area emitters are light
+    /// tracing's (`crate::splat`), not counted here.
+    skip_area_emitters: bool,
+    /// The primary chain splits at its first delta vertex with two lobes (`ChainEnd::Split`),
+    /// with this factor on the lobe probabilities (1; `Gather::split`).
+    may_split: Option<f32>,
 }
 
 /// How a chain ended.
@@ -80,48 +115,60 @@ enum ChainEnd {
     Stop,
     /// At a non-delta surface vertex.
     Surface(SurfaceInteraction),
+    /// At the primary chain's first delta vertex with two lobes (glass: reflection and
+    /// refraction), followed both ways instead of one chosen by its probability: each branch's
+    /// throughput is `beta f |cos| / p * p` (the lobe's weight times its probability, so the
+    /// two sum to the expectation of the choice). This removes the noise of the choice itself,
+    /// the largest in pixels where glass reflects a small lamp (on `scenes/glass-beam.xml` the
+    /// lamp seen in the ball, 40% of the variance left after the caustic paths).
+    Split([(Walk, f32); 2]),
 }
 
 /// The radiance along `ray` (from `medium`) of every path in the table of docs/theory.md §2.1, split by component.
 pub(crate) fn whole_path_radiance(
     scene: &Scene,
-    mut ray: Ray,
-    mut medium: Option<MediumId>,
+    ray: Ray,
+    medium: Option<MediumId>,
     sampler: &mut Sampler,
     gather: &impl Gather,
 ) -> PathRadiance {
-    let max_events = haze_scene::depth_limit(scene.integrator.max_depth);
     let mut out = PathRadiance::default();
-    let mut beta = Rgb::ONE;
-    let mut surface_seen = false;
-    let mut gathering = true;
-    let mut events = 0u32;
-    // The camera sees the chain's end directly (no delta sample but thin sheets' straight
-    // crossings): only the first chain, until a delta sample changes the direction.
-    let mut direct = true;
-    // The continued chain after a directly seen gathering point: its area emitters are light
-    // tracing's (`crate::splat`), not counted here.
-    let mut skip_area_emitters = false;
-    CHAIN.with_borrow_mut(|chain| loop {
+    let start = Walk {
+        ray,
+        medium,
+        beta: Rgb::ONE,
+        surface_seen: false,
+        gathering: true,
+        events: 0,
+        direct: true,
+        skip_area_emitters: false,
+        may_split: gather.split(),
+    };
+    CHAIN.with_borrow_mut(|chain| {
         chain.clear();
-        let end = walk_chain(
-            scene,
-            &mut ray,
-            &mut medium,
-            sampler,
-            &mut beta,
-            &mut surface_seen,
-            &mut gathering,
-            &mut direct,
-            skip_area_emitters,
-            &mut events,
-            max_events,
-            chain,
-            &mut out,
-        );
-        let seen_directly = std::mem::replace(&mut direct, false);
-        skip_area_emitters = false;
-        for ChainSegment { cs, after_surface, .. } in chain.iter() {
+        walk(scene, start, chain, sampler, gather, &mut out);
+    });
+    out
+}
+
+/// Walks chains from `st` until the path ends: gathers on each chain's segments and at its
+/// gathering point, then continues from one gathering vertex. `chain` may start with a split's
+/// prefix (gathered already, continuations from it scaled by the branch's probability).
+fn walk(
+    scene: &Scene,
+    mut st: Walk,
+    chain: &mut Vec<ChainSegment>,
+    sampler: &mut Sampler,
+    gather: &impl Gather,
+    out: &mut PathRadiance,
+) {
+    let max_events = haze_scene::depth_limit(scene.integrator.max_depth);
+    loop {
+        let end = walk_chain(scene, &mut st, max_events, sampler, chain, out);
+        let seen_directly = std::mem::replace(&mut st.direct, false);
+        st.skip_area_emitters = false;
+        st.may_split = None;
+        for ChainSegment { cs, after_surface, .. } in chain.iter().filter(|c| !c.gathered) {
             let single = crate::single::single_scattering(scene, cs, sampler);
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
             let [medium_only, after] = gather.segment(cs, key);
@@ -134,150 +181,203 @@ pub(crate) fn whole_path_radiance(
             out.add(c_multiple, cs.tr_before * medium_only);
             out.add(Component::Surface, cs.tr_before * after);
         }
+        if let ChainEnd::Split(branches) = end {
+            // Each branch walks on with this chain as its prefix: gathered once (above), and a
+            // continuation from it counted with the branch's probability, so that the two
+            // branches' continuations from the prefix sum to one.
+            BRANCH_CHAIN.with_borrow_mut(|sub| {
+                for (branch, p) in branches {
+                    sub.clear();
+                    sub.extend(chain.iter().map(|c| ChainSegment {
+                        gathered: true,
+                        scale: c.scale * p,
+                        ..*c
+                    }));
+                    walk(scene, branch, sub, sampler, gather, out);
+                }
+            });
+            return;
+        }
         let hit = match end {
-            ChainEnd::Surface(h) if gathering => Some(h),
+            ChainEnd::Surface(h) if st.gathering => Some(h),
             _ => None,
         };
         let mut frame_wi = None;
         if let Some(h) = &hit {
             let shape = &scene.shapes[h.shape as usize];
             let frame = Frame::from_normal(h.ns);
-            let wi = frame.to_local(-ray.d);
-            let nee = surface_nee(scene, sampler, h, &frame, wi, medium, SurfaceMis::None);
+            let wi = frame.to_local(-st.ray.d);
+            let nee = surface_nee(scene, sampler, h, &frame, wi, st.medium, SurfaceMis::None);
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
             let gp = GatherPoint { p: h.p, n: h.n, frame, wi, bsdf: &shape.bsdf, uv: h.uv };
-            out.add(Component::Surface, beta * (nee + gather.point(&gp, key)));
+            out.add(Component::Surface, st.beta * (nee + gather.point(&gp, key)));
             frame_wi = Some((frame, wi));
         }
         // Continue from one gathering vertex of the chain, chosen uniformly.
         let scattering = chain.iter().filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black()).count();
         let candidates = scattering + hit.is_some() as usize;
-        if candidates == 0 || events + 1 >= max_events {
-            return out;
+        if candidates == 0 || st.events + 1 >= max_events {
+            return;
         }
-        events += 1;
+        st.events += 1;
         let k = ((sampler.next_1d() * candidates as f32) as usize).min(candidates - 1);
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
         if k < scattering {
-            let ChainSegment { cs, after_surface, direct: seen } = *chain
+            let c = *chain
                 .iter()
                 .filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black())
                 .nth(k)
                 .expect("k < count");
-            skip_area_emitters = seen && gather.splats_caustics();
+            st.skip_area_emitters = c.direct && gather.splats_caustics();
             // A uniform point of the segment, pdf 1/len; phase sampling is exact (weight 1).
+            let cs = c.cs;
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
-            beta = cs.tr_before
+            st.beta = cs.tr_before
                 * transmittance(med.sigma_t, u)
                 * med.sigma_s()
-                * (cs.seg.len * candidates as f32);
-            surface_seen = after_surface;
+                * (cs.seg.len * candidates as f32 * c.scale);
+            st.surface_seen = c.after_surface;
             let (d, _) = med.phase.sample(cs.seg.d, u2);
-            ray = Ray::new(cs.seg.at(u), d);
-            medium = Some(cs.medium);
+            st.ray = Ray::new(cs.seg.at(u), d);
+            st.medium = Some(cs.medium);
         } else {
-            skip_area_emitters = seen_directly && gather.splats_caustics();
-            let (Some(h), Some((frame, wi))) = (hit, frame_wi) else { return out };
+            st.skip_area_emitters = seen_directly && gather.splats_caustics();
+            let (Some(h), Some((frame, wi))) = (hit, frame_wi) else { return };
             let shape = &scene.shapes[h.shape as usize];
-            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return out };
-            beta *= bs.weight * candidates as f32;
-            surface_seen = true;
+            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return };
+            st.beta *= bs.weight * candidates as f32;
+            st.surface_seen = true;
             let d = frame.to_world(bs.wo);
-            medium = shape.medium_towards(d, h.n, medium);
-            ray = Ray::new(offset_origin(h.p, h.n, d), d);
+            st.medium = shape.medium_towards(d, h.n, st.medium);
+            st.ray = Ray::new(offset_origin(h.p, h.n, d), d);
         }
-        gathering = false;
-        if events > RR_EVENTS {
-            let q = beta.max_component().min(0.95);
+        chain.clear();
+        st.gathering = false;
+        if st.events > RR_EVENTS {
+            let q = st.beta.max_component().min(0.95);
             if sampler.next_1d() >= q {
-                return out;
+                return;
             }
-            beta /= q;
+            st.beta /= q;
         }
-        if beta.is_black() {
-            return out;
+        if st.beta.is_black() {
+            return;
         }
-    })
+    }
 }
 
-/// Walks one chain from `ray` through null boundaries and delta surfaces. While `gathering`,
+/// The walk after the delta sample `bs` at `h` (frame `frame`) of the state `st`.
+fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample, scene: &Scene) -> Walk {
+    let shape = &scene.shapes[h.shape as usize];
+    let d = frame.to_world(bs.wo);
+    Walk {
+        ray: Ray::new(offset_origin(h.p, h.n, d), d),
+        medium: shape.medium_towards(d, h.n, st.medium),
+        beta: st.beta * bs.weight,
+        surface_seen: true,
+        gathering: st.gathering || !bs.null,
+        direct: st.direct && bs.null,
+        ..*st
+    }
+}
+
+/// Walks one chain from `st.ray` through null boundaries and delta surfaces. While gathering,
 /// every medium interval goes into `chain` and emitters met are added to `out` (area emitters
 /// not under `skip_area_emitters`); a delta surface sample that is not `null` (straight through
-/// a thin sheet) turns gathering on and `direct` off.
-#[allow(clippy::too_many_arguments)]
+/// a thin sheet) turns gathering on and `direct` off. Under `may_split` the first delta vertex
+/// with two lobes ends the chain with both (`ChainEnd::Split`).
 fn walk_chain(
     scene: &Scene,
-    ray: &mut Ray,
-    medium: &mut Option<MediumId>,
-    sampler: &mut Sampler,
-    beta: &mut Rgb,
-    surface_seen: &mut bool,
-    gathering: &mut bool,
-    direct: &mut bool,
-    skip_area_emitters: bool,
-    events: &mut u32,
+    st: &mut Walk,
     max_events: u32,
+    sampler: &mut Sampler,
     chain: &mut Vec<ChainSegment>,
     out: &mut PathRadiance,
 ) -> ChainEnd {
     for _ in 0..10_000 {
-        let hit = scene.intersect(ray);
-        let len = hit.map_or(ray.t_max, |h| h.t);
-        if let Some(m) = *medium {
-            if *gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
-                let cs = CameraSegment { seg: Segment::new(ray.o, ray.d, len), medium: m, tr_before: *beta };
-                chain.push(ChainSegment { cs, after_surface: *surface_seen, direct: *direct });
+        let hit = scene.intersect(&st.ray);
+        let len = hit.map_or(st.ray.t_max, |h| h.t);
+        if let Some(m) = st.medium {
+            if st.gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
+                let cs = CameraSegment {
+                    seg: Segment::new(st.ray.o, st.ray.d, len),
+                    medium: m,
+                    tr_before: st.beta,
+                };
+                chain.push(ChainSegment {
+                    cs,
+                    after_surface: st.surface_seen,
+                    direct: st.direct,
+                    gathered: false,
+                    scale: 1.0,
+                });
             }
-            *beta *= transmittance(scene.medium(m).sigma_t, len);
+            st.beta *= transmittance(scene.medium(m).sigma_t, len);
         }
-        let emitted = if *surface_seen { Component::Surface } else { Component::Emitted };
+        let emitted = if st.surface_seen { Component::Surface } else { Component::Emitted };
         let Some(h) = hit else {
-            if *gathering {
-                out.add(emitted, *beta * scene.environment_radiance(ray.d));
+            if st.gathering {
+                out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
             }
             return ChainEnd::Stop;
         };
-        if *gathering && !skip_area_emitters {
-            if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -ray.d) {
-                out.add(emitted, *beta * le);
+        if st.gathering && !st.skip_area_emitters {
+            if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
+                out.add(emitted, st.beta * le);
             }
         }
         let shape = &scene.shapes[h.shape as usize];
-        if shape.cross_if_null(h.p, h.n, ray, medium) {
+        if shape.cross_if_null(h.p, h.n, &mut st.ray, &mut st.medium) {
             continue;
         }
-        if shape.bsdf.is_black() || beta.is_black() {
+        if shape.bsdf.is_black() || st.beta.is_black() {
             return ChainEnd::Stop;
         }
         if !shape.bsdf.is_specular() {
             return ChainEnd::Surface(h);
         }
-        *events += 1;
-        if *events >= max_events {
+        st.events += 1;
+        if st.events >= max_events {
             return ChainEnd::Stop;
         }
         let frame = Frame::from_normal(h.ns);
-        let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), sampler.next_1d(), sampler.next_2d(), h.uv)
-        else {
+        let wi = frame.to_local(-st.ray.d);
+        let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
+        if let Some(factor) = st.may_split {
+            // The two lobes of a two-lobe delta BSDF: `u1` below and above every lobe
+            // probability picks each (the BSDFs choose a lobe by `u1 < p`).
+            let lobes =
+                (shape.bsdf.sample(wi, 0.0, u2, h.uv), shape.bsdf.sample(wi, ONE_MINUS_EPS, u2, h.uv));
+            if let (Some(a), Some(b)) = lobes {
+                if a.pdf < 1.0 && b.pdf < 1.0 && (a.transmitted != b.transmitted || a.null != b.null) {
+                    let branch = |bs: &BsdfSample| {
+                        let mut next = after_delta(st, &h, &frame, bs, scene);
+                        next.may_split = None;
+                        (next, bs.pdf * factor)
+                    };
+                    let split = [branch(&a), branch(&b)];
+                    return ChainEnd::Split(split.map(|(mut w, p)| {
+                        w.beta *= p;
+                        (w, p)
+                    }));
+                }
+            }
+        }
+        let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else {
             return ChainEnd::Stop;
         };
-        *beta *= bs.weight;
-        *surface_seen = true;
-        if !bs.null {
-            *gathering = true;
-            *direct = false;
-        }
-        let d = frame.to_world(bs.wo);
-        *medium = shape.medium_towards(d, h.n, *medium);
-        *ray = Ray::new(offset_origin(h.p, h.n, d), d);
-        if *events > RR_EVENTS {
-            let q = beta.max_component().min(0.95);
+        *st = after_delta(st, &h, &frame, &bs, scene);
+        if st.events > RR_EVENTS {
+            let q = st.beta.max_component().min(0.95);
             if sampler.next_1d() >= q {
                 return ChainEnd::Stop;
             }
-            *beta /= q;
+            st.beta /= q;
         }
     }
     ChainEnd::Stop
 }
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;

@@ -123,7 +123,7 @@ const CAUSTIC_STREAM: u64 = 0x5b1a_7c0f_fee0_0001;
 impl CausticTracer {
     /// `paths` caustic paths per pass, at most `max_events` delta vertices each; `None` if the
     /// scene has no delta surface or no point, spot or area emitter (then there are no such
-    /// caustics), or `paths` is 0.
+    /// caustics), if `paths` is 0, or if a medium is heterogeneous.
     pub fn new(scene: &Scene, paths: u64, max_events: u32) -> Option<Self> {
         let targets: Vec<Target> = scene
             .shapes
@@ -131,7 +131,9 @@ impl CausticTracer {
             .filter(|s| s.bsdf.is_specular() && !s.bsdf.is_null())
             .filter_map(|s| bounding_sphere(&s.geometry))
             .collect();
-        if targets.is_empty() || paths == 0 {
+        // Heterogeneous media have no closed-form beam: there the continuation keeps these
+        // paths (`Gather::splats_caustics` is false without a tracer).
+        if targets.is_empty() || paths == 0 || scene.media.iter().any(|m| !m.is_homogeneous()) {
             return None;
         }
         let mut weights: Vec<(u32, f32)> = scene
@@ -295,11 +297,6 @@ impl CausticTracer {
             let hit = scene.intersect(&ray);
             if let Some(m) = medium {
                 let med = scene.medium(m);
-                if !med.is_homogeneous() {
-                    // Heterogeneous media have no closed-form beam; their caustic paths are
-                    // not traced (the many-light methods refuse such scenes).
-                    return;
-                }
                 let len = hit.map_or(max_len, |h| h.t).min(max_len);
                 if through_delta && len > 0.0 {
                     if let Some(splat) = view.connect_beam(scene, ray.o, ray.d, len, m, beta, s.next_1d()) {

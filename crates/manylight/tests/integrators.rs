@@ -99,6 +99,27 @@ fn compare(a: &Passes, b: &Passes, comp: Component) -> (ZTestReport, f64) {
     (pixels, mean_z)
 }
 
+/// z-score of the mean of the per-pass differences of `comp`'s image means of two renders
+/// with the same seeds (paired: the light paths of a pass are the same in both, so their noise
+/// cancels in the difference).
+fn paired_z(a: &Passes, b: &Passes, comp: Component) -> f64 {
+    let c = comp as usize;
+    let d: Vec<f64> = a
+        .pass_means
+        .iter()
+        .zip(&b.pass_means)
+        .map(|(x, y)| (x[c].iter().sum::<f64>() - y[c].iter().sum::<f64>()) / 3.0)
+        .collect();
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    if var > 0.0 {
+        mean / (var / n).sqrt()
+    } else {
+        0.0
+    }
+}
+
 /// Prints one comparison and records it in `failures` when more than `max_failed` of the
 /// channel-pixels fail the z-test or the image mean is more than 5 standard errors off.
 fn judge(failures: &mut Vec<String>, what: &str, r: &ZTestReport, mean_z: f64, max_failed: f64) {
@@ -297,22 +318,6 @@ fn caustic_paths_match_the_camera_continuation() {
         caustic_paths: Some(caustic_paths),
         ..settings(scene, paths)
     };
-    // z-score of the mean of the per-pass differences of the `surface` image means.
-    let paired_z = |a: &Passes, b: &Passes| {
-        let d: Vec<f64> = a
-            .pass_means
-            .iter()
-            .zip(&b.pass_means)
-            .map(|(x, y)| {
-                let s = Component::Surface as usize;
-                (x[s].iter().sum::<f64>() - y[s].iter().sum::<f64>()) / 3.0
-            })
-            .collect();
-        let n = d.len() as f64;
-        let mean = d.iter().sum::<f64>() / n;
-        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-        mean / (var / n).sqrt()
-    };
     let mut failures = Vec::new();
     for filter in [PixelFilter::Box, PixelFilter::MITSUBA_DEFAULT] {
         scene.camera.filter = filter;
@@ -321,17 +326,56 @@ fn caustic_paths_match_the_camera_continuation() {
         let mut splatting = VrlIntegrator::new(&scene, with(&scene, 2000), 1).unwrap();
         let splats = render_passes(&scene, &splatting, passes, 16, 1);
         let (r, _) = compare(&splats, &continuation, Component::Surface);
-        let z = paired_z(&splats, &continuation);
+        let z = paired_z(&splats, &continuation, Component::Surface);
         judge(&mut failures, &format!("{filter:?}: caustic paths vs continuation (paired z)"), &r, z, 0.01);
         if filter == PixelFilter::Box {
             splatting.caustic_scale = 1.2;
             let wrong = render_passes(&scene, &splatting, passes, 16, 1);
-            let z = paired_z(&wrong, &continuation);
+            let z = paired_z(&wrong, &continuation, Component::Surface);
             println!("caustic splats x 1.2: paired image-mean z = {z:.2}");
             assert!(z.abs() > 5.0, "20% too bright caustic splats went unnoticed: paired z = {z:.2}");
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The camera walk's split at its first glass vertex (both lobes followed, `gather.rs`
+/// `ChainEnd::Split`) against the unsplit walk (one lobe by its Fresnel probability), every
+/// component by the paired per-pass image-mean z (same seeds), on the glass-ball room seen
+/// through a narrow lens so that the ball in dense haze fills most of the view (continuations
+/// from the haze in front of the ball, the split's prefix, take part). Negative control: branches
+/// weighted 50% too much fail (the camera paths part at the glass, so the paired difference
+/// keeps their noise: 10% moves it by about 2 standard errors). (A wrong weight of the continuations from the prefix alone, which
+/// only make paths through the ball into the haze in front of it, moves this image too little
+/// to be caught in seconds.)
+#[test]
+fn split_at_the_first_glass_vertex_matches_the_unsplit_walk() {
+    let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml"));
+    (scene.camera.width, scene.camera.height) = (12, 9);
+    scene.camera.fov_x_deg = 20.0;
+    let (paths, passes) = (20, 48);
+    let with_split = |split: Option<f32>, seed: u64| {
+        let mut i = VrlIntegrator::new(&scene, settings(&scene, paths), seed).unwrap();
+        i.split = split;
+        render_passes(&scene, &i, passes, 4, seed)
+    };
+    // Same seeds: the passes' light paths are the same, the camera paths part at the glass.
+    let unsplit = with_split(None, 1);
+    let split = with_split(Some(1.0), 1);
+    let mut failures = Vec::new();
+    for comp in Component::ALL {
+        let z = paired_z(&split, &unsplit, comp);
+        println!("split vs unsplit {}: paired image-mean z = {z:.2}", comp.name());
+        if z.abs() > 5.0 {
+            failures.push(format!("split vs unsplit {}: paired z = {z:.2}", comp.name()));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    // Branches weighted 50% too much.
+    let heavy = with_split(Some(1.5), 1);
+    let mean_z = paired_z(&heavy, &unsplit, Component::Surface);
+    println!("split branches weighted x 1.5, surface: paired image-mean z = {mean_z:.2}");
+    assert!(mean_z.abs() > 5.0, "split branches weighted 50% too much went unnoticed");
 }
 
 /// `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` against `volpath`, every component, on the peer scene

@@ -34,6 +34,9 @@ pub struct VrlIntegrator {
     #[doc(hidden)]
     pub caustic_scale: f32,
     caustics: Option<CausticTracer>,
+    /// `gather::Gather::split`: `Some(1)`, except in the tests of the split.
+    #[doc(hidden)]
+    pub split: Option<f32>,
     tracer: PassTracer,
     /// Camera segment x VRL evaluations so far (for `haze bench`).
     evaluations: AtomicU64,
@@ -59,6 +62,7 @@ impl VrlIntegrator {
             gather_point_scale: 1.0,
             caustic_scale: 1.0,
             caustics,
+            split: Some(1.0),
             tracer: PassTracer::new(paths),
             evaluations: AtomicU64::new(0),
         })
@@ -135,6 +139,10 @@ impl Gather for VrlGather<'_> {
 
     fn splats_caustics(&self) -> bool {
         self.integrator.caustics.is_some()
+    }
+
+    fn split(&self) -> Option<f32> {
+        self.integrator.split
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
