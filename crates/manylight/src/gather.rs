@@ -142,10 +142,15 @@ pub(crate) fn whole_path_radiance(
             // A uniform point of the segment, pdf 1/len; phase sampling is exact (weight 1).
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
-            beta = cs.tr_before
-                * transmittance(med.sigma_t, u)
-                * med.sigma_s()
-                * (cs.seg.len * candidates as f32);
+            beta = match med.hetero.as_deref() {
+                None => cs.tr_before * transmittance(med.sigma_t, u) * med.sigma_s() * (cs.seg.len * candidates as f32),
+                // `T(0, u) sigma_s(x)` estimated (T31).
+                Some(h) => {
+                    cs.tr_before
+                        * crate::hetero::along(h, &cs.seg, cs.seg.at(u), sampler)
+                        * (cs.seg.len * candidates as f32)
+                }
+            };
             surface_seen = after_surface;
             let (d, _) = med.phase.sample(cs.seg.d, u2);
             ray = Ray::new(cs.seg.at(u), d);
@@ -195,11 +200,29 @@ fn walk_chain(
         let hit = scene.intersect(ray);
         let len = hit.map_or(ray.t_max, |h| h.t);
         if let Some(m) = *medium {
-            if *gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
-                let cs = CameraSegment { seg: Segment::new(ray.o, ray.d, len), medium: m, tr_before: *beta };
-                chain.push((cs, *surface_seen));
+            match scene.medium(m).hetero.as_deref() {
+                None => {
+                    if *gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
+                        let cs =
+                            CameraSegment { seg: Segment::new(ray.o, ray.d, len), medium: m, tr_before: *beta };
+                        chain.push((cs, *surface_seen));
+                    }
+                    *beta *= transmittance(scene.medium(m).sigma_t, len);
+                }
+                Some(h) => {
+                    // The gathering segment is the part inside the medium's box (the medium is
+                    // empty outside it, T27, so the throughput at the box is `beta`); the walk
+                    // goes on with a ratio-tracking estimate of the interval's transmittance
+                    // (T30), independent of the estimates on the segment (docs/theory.md §12.5).
+                    if *gathering && chain.len() < MAX_SEGMENTS {
+                        if let Some((a, b)) = h.clip(ray.o, ray.d, 0.0, len) {
+                            let seg = Segment::new(ray.at(a), ray.d, b - a);
+                            chain.push((CameraSegment { seg, medium: m, tr_before: *beta }, *surface_seen));
+                        }
+                    }
+                    *beta *= h.transmittance(ray.o, ray.d, 0.0, len, sampler);
+                }
             }
-            *beta *= transmittance(scene.medium(m).sigma_t, len);
         }
         let emitted = if *surface_seen { Component::Surface } else { Component::Emitted };
         let Some(h) = hit else {

@@ -208,6 +208,39 @@ impl Heterogeneous {
         self.sigma_t.eval(p) * self.scale
     }
 
+    /// `sigma_t(x)` and `sigma_s(x) = sigma_t(x) albedo(x)` of the medium itself (T27): zero
+    /// outside the `sigma_t` volume's box, where Mitsuba 3 clips the medium away (unlike
+    /// [`Self::sigma_t`], which evaluates the volume wherever asked). For points the many-light
+    /// estimators sample on their own (`docs/theory.md` §12.5), which may lie outside the box.
+    #[inline]
+    pub fn coefficients(&self, p: Vec3) -> (Rgb, Rgb) {
+        let (lo, hi) = (self.majorants.lo, self.majorants.hi);
+        if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
+            return (Rgb::ZERO, Rgb::ZERO);
+        }
+        let sigma_t = self.sigma_t(p);
+        if sigma_t.is_black() {
+            return (Rgb::ZERO, Rgb::ZERO);
+        }
+        (sigma_t, sigma_t * self.albedo.eval(p))
+    }
+
+    /// The part `[a, b]` of `[t0, t1]` where the ray `o + t d` is inside the medium's box, if
+    /// any: outside it the medium is empty (T27), so segments can be clipped to it.
+    pub fn clip(&self, o: Vec3, d: Vec3, t0: f32, t1: f32) -> Option<(f32, f32)> {
+        let mut segs = self.majorants.segments(o, d, t0, t1);
+        let first = segs.next()?;
+        let last = segs.last().unwrap_or(first);
+        (first.t0 < last.t1).then_some((first.t0, last.t1))
+    }
+
+    /// The mean of the majorant cells, per channel: the homogeneous proxy of the medium that
+    /// the many-light methods' importances use (`docs/theory.md` §12.5).
+    pub fn mean_majorant(&self) -> Rgb {
+        let n = self.majorants.cells.len().max(1) as f32;
+        self.majorants.cells.iter().fold(Rgb::ZERO, |m, c| m + *c) * (1.0 / n)
+    }
+
     /// The largest majorant of any cell, per channel (a homogeneous bound of the medium).
     pub fn global_majorant(&self) -> Rgb {
         self.majorants.cells.iter().fold(Rgb::ZERO, |m, c| m.max(*c))

@@ -32,6 +32,8 @@ pub struct VplPass {
     groups: [Vec<Vpl>; 2],
     surface_vpls: Vec<SurfaceVpl>,
     media: Vec<VrlMedium>,
+    /// The scene has a heterogeneous medium: every light goes through `crate::hetero`.
+    hetero: bool,
 }
 
 impl VplIntegrator {
@@ -58,7 +60,7 @@ impl Integrator for VplIntegrator {
             .tracer
             .trace(scene, seed, pass, &self.settings.trace, |s| s.vpls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
-        VplPass { groups, surface_vpls: surface_vpls(&set), media: media(scene) }
+        VplPass { groups, surface_vpls: surface_vpls(&set), media: media(scene), hetero: crate::hetero::any(scene) }
     }
 
     fn radiance(
@@ -94,6 +96,13 @@ impl Gather for VplGather<'_> {
         let cam_medium = &pass.media[cs.medium as usize];
         let sums = [0, 1].map(|g| {
             let mut sum = Rgb::ZERO;
+            if pass.hetero {
+                for (i, vpl) in pass.groups[g].iter().enumerate() {
+                    let u = light_uniforms(key, i as u32);
+                    sum += crate::hetero::vpl_to_segment(scene, cs, &pass.media, vpl, u, self.integrator.clamp);
+                }
+                return sum;
+            }
             for (i, vpl) in pass.groups[g].iter().enumerate() {
                 sum += sample_vpl_contribution(
                     &cs.seg,
