@@ -143,7 +143,12 @@ pub(crate) fn whole_path_radiance(
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
             beta = match med.hetero.as_deref() {
-                None => cs.tr_before * transmittance(med.sigma_t, u) * med.sigma_s() * (cs.seg.len * candidates as f32),
+                None => {
+                    cs.tr_before
+                        * transmittance(med.sigma_t, u)
+                        * med.sigma_s()
+                        * (cs.seg.len * candidates as f32)
+                }
                 // `T(0, u) sigma_s(x)` estimated (T31).
                 Some(h) => {
                     cs.tr_before
@@ -203,8 +208,11 @@ fn walk_chain(
             match scene.medium(m).hetero.as_deref() {
                 None => {
                     if *gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
-                        let cs =
-                            CameraSegment { seg: Segment::new(ray.o, ray.d, len), medium: m, tr_before: *beta };
+                        let cs = CameraSegment {
+                            seg: Segment::new(ray.o, ray.d, len),
+                            medium: m,
+                            tr_before: *beta,
+                        };
                         chain.push((cs, *surface_seen));
                     }
                     *beta *= transmittance(scene.medium(m).sigma_t, len);

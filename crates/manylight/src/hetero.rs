@@ -53,7 +53,11 @@ pub(crate) fn tracker(u: Vec2, salt: Vec3) -> Sampler {
 /// The estimators' view of medium `id` (`m` its entry of the pass's media table): `m` if
 /// homogeneous; for a heterogeneous one the neutral medium (module docs) and its coefficients.
 #[inline]
-pub(crate) fn view<'a>(scene: &'a Scene, m: &VrlMedium, id: MediumId) -> (VrlMedium, Option<&'a Heterogeneous>) {
+pub(crate) fn view<'a>(
+    scene: &'a Scene,
+    m: &VrlMedium,
+    id: MediumId,
+) -> (VrlMedium, Option<&'a Heterogeneous>) {
     match scene.medium(id).hetero.as_deref() {
         None => (*m, None),
         Some(h) => (VrlMedium { sigma_s: Rgb::ONE, sigma_t: Rgb::ZERO, phase: m.phase }, Some(h)),
@@ -87,7 +91,13 @@ pub(crate) fn connect(scene: &Scene, from: MediumId, y: Vec3, x: Vec3, s: &mut S
 
 /// VRL -> camera segment in a scene with heterogeneous media (T33): the joint estimator of
 /// `docs/theory.md` §4.3 with the neutral media, times the heterogeneous factors of both sides.
-pub(crate) fn vrl_to_segment(scene: &Scene, cs: &CameraSegment, media: &[VrlMedium], vrl: &Vrl, u: Vec2) -> Rgb {
+pub(crate) fn vrl_to_segment(
+    scene: &Scene,
+    cs: &CameraSegment,
+    media: &[VrlMedium],
+    vrl: &Vrl,
+    u: Vec2,
+) -> Rgb {
     let (cam_m, cam_h) = view(scene, &media[cs.medium as usize], cs.medium);
     let (vrl_m, vrl_h) = view(scene, &media[vrl.medium as usize], vrl.medium);
     let mut s = tracker(u, vrl.seg.o);
@@ -112,16 +122,23 @@ pub(crate) fn vrl_to_segment(scene: &Scene, cs: &CameraSegment, media: &[VrlMedi
 pub(crate) fn vrl_to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
     let (vrl_m, vrl_h) = view(scene, &media[vrl.medium as usize], vrl.medium);
     let mut s = tracker(Vec2::new(u, 0.5), vrl.seg.o + gp.p);
-    crate::vrl::surface::sample_vrl_to_point(gp.p, |d| gp.reflectance(d), vrl, &vrl_m, u, |y, x| {
-        let f = match vrl_h {
-            Some(h) => along(h, &vrl.seg, y, &mut s),
-            None => Rgb::ONE,
-        };
-        if f.is_black() {
-            return f;
-        }
-        f * connect(scene, vrl.medium, y, x, &mut s)
-    })
+    crate::vrl::surface::sample_vrl_to_point(
+        gp.p,
+        |d| gp.reflectance(d),
+        vrl,
+        &vrl_m,
+        u,
+        |y, x| {
+            let f = match vrl_h {
+                Some(h) => along(h, &vrl.seg, y, &mut s),
+                None => Rgb::ONE,
+            };
+            if f.is_black() {
+                return f;
+            }
+            f * connect(scene, vrl.medium, y, x, &mut s)
+        },
+    )
 }
 
 /// Medium VPL -> camera segment (T33 without the VRL side: the VPL's flux holds its own
@@ -161,21 +178,29 @@ pub(crate) fn surface_vpl_to_segment(
     let (cam_m, cam_h) = view(scene, cam_medium, cs.medium);
     let mut s = tracker(u, vpl.p);
     let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-    crate::vpl::sample_point_light_to_segment(&cs.seg, &cam_m, vpl.p, |w| vpl.intensity(bsdf, w), u.x, clamp, |_, x| {
-        let f = match cam_h {
-            Some(h) => along(h, &cs.seg, x, &mut s),
-            None => Rgb::ONE,
-        };
-        if f.is_black() {
-            return f;
-        }
-        let v = x - vpl.p;
-        let dist = v.length();
-        if dist <= 0.0 {
-            return Rgb::ZERO;
-        }
-        let d = v / dist;
-        let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
-        f * transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, &mut s)
-    })
+    crate::vpl::sample_point_light_to_segment(
+        &cs.seg,
+        &cam_m,
+        vpl.p,
+        |w| vpl.intensity(bsdf, w),
+        u.x,
+        clamp,
+        |_, x| {
+            let f = match cam_h {
+                Some(h) => along(h, &cs.seg, x, &mut s),
+                None => Rgb::ONE,
+            };
+            if f.is_black() {
+                return f;
+            }
+            let v = x - vpl.p;
+            let dist = v.length();
+            if dist <= 0.0 {
+                return Rgb::ZERO;
+            }
+            let d = v / dist;
+            let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+            f * transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, &mut s)
+        },
+    )
 }

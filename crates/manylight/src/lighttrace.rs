@@ -292,8 +292,7 @@ fn trace_one(
                             after_surface,
                         });
                         events += 1;
-                        if events >= settings.max_events
-                            || !survives_roulette(s, &mut t, r, events, settings)
+                        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings)
                         {
                             return;
                         }
@@ -307,47 +306,48 @@ fn trace_one(
                     }
                 }
             } else {
-            let ff = sample_free_flight(med.sigma_t, t_surface, hero, s.next_1d());
-            let len = match ff {
-                FreeFlight::Interaction { t, .. } => t,
-                FreeFlight::Pass { .. } => t_surface,
-            };
-            if len > 0.0 {
-                out.vrls.push(VrlRecord {
-                    o: ray.o,
-                    d: ray.d,
-                    len: len.min(max_len),
-                    beta: power * t,
-                    ratio: r,
-                    medium: m,
-                    after_surface,
-                });
-            }
-            match ff {
-                FreeFlight::Interaction { t: dist, weight, ratio } => {
-                    t *= weight * med.sigma_s();
-                    r *= ratio;
-                    let p = ray.at(dist);
-                    out.vpls.push(VplRecord {
-                        p,
-                        d_in: ray.d,
-                        flux: power * t / r.mean(),
+                let ff = sample_free_flight(med.sigma_t, t_surface, hero, s.next_1d());
+                let len = match ff {
+                    FreeFlight::Interaction { t, .. } => t,
+                    FreeFlight::Pass { .. } => t_surface,
+                };
+                if len > 0.0 {
+                    out.vrls.push(VrlRecord {
+                        o: ray.o,
+                        d: ray.d,
+                        len: len.min(max_len),
+                        beta: power * t,
+                        ratio: r,
                         medium: m,
                         after_surface,
                     });
-                    events += 1;
-                    if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
-                        return;
+                }
+                match ff {
+                    FreeFlight::Interaction { t: dist, weight, ratio } => {
+                        t *= weight * med.sigma_s();
+                        r *= ratio;
+                        let p = ray.at(dist);
+                        out.vpls.push(VplRecord {
+                            p,
+                            d_in: ray.d,
+                            flux: power * t / r.mean(),
+                            medium: m,
+                            after_surface,
+                        });
+                        events += 1;
+                        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings)
+                        {
+                            return;
+                        }
+                        let (d, _) = med.phase.sample(ray.d, s.next_2d());
+                        ray = Ray::new(p, d);
+                        continue;
                     }
-                    let (d, _) = med.phase.sample(ray.d, s.next_2d());
-                    ray = Ray::new(p, d);
-                    continue;
+                    FreeFlight::Pass { weight, ratio } => {
+                        t *= weight;
+                        r *= ratio;
+                    }
                 }
-                FreeFlight::Pass { weight, ratio } => {
-                    t *= weight;
-                    r *= ratio;
-                }
-            }
             }
         }
         let Some(h) = hit else { return };

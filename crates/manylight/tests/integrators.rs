@@ -364,7 +364,8 @@ fn smoke_grid(rgb: bool) -> haze_scene::volume::Grid {
 /// spot light from the side, the camera in vacuum, a floor below. `offset` shifts the grid by
 /// that many cells along x (the negative control's perturbed density lookup).
 fn smoke_scene(room: bool, offset: f32) -> Scene {
-    let dir = std::env::temp_dir().join(format!("haze-manylight-smoke-{}-{room}-{offset}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("haze-manylight-smoke-{}-{room}-{offset}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("smoke.vol"), smoke_grid(!room).to_vol_bytes()).unwrap();
     let size = 1.2f32;
@@ -430,8 +431,8 @@ fn check_smoke(room: bool) {
     let (paths, passes) = (20, 48);
     let reference = check_against_volpath(&scene, label, paths, passes, true);
     let perturbed = smoke_scene(room, 0.5);
-    let wrong =
-        render_passes(&perturbed, &VrlIntegrator::new(&perturbed, settings(&perturbed, paths), 1).unwrap(), passes, 1, 1);
+    let vrl = VrlIntegrator::new(&perturbed, settings(&perturbed, paths), 1).unwrap();
+    let wrong = render_passes(&perturbed, &vrl, 4 * passes, 1, 1);
     let mut caught = Vec::new();
     for comp in Component::ALL {
         let (r, mean_z) = compare(&wrong, &reference, comp);

@@ -60,7 +60,12 @@ impl Integrator for VplIntegrator {
             .tracer
             .trace(scene, seed, pass, &self.settings.trace, |s| s.vpls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
-        VplPass { groups, surface_vpls: surface_vpls(&set), media: media(scene), hetero: crate::hetero::any(scene) }
+        VplPass {
+            groups,
+            surface_vpls: surface_vpls(&set),
+            media: media(scene),
+            hetero: crate::hetero::any(scene),
+        }
     }
 
     fn radiance(
@@ -99,7 +104,8 @@ impl Gather for VplGather<'_> {
             if pass.hetero {
                 for (i, vpl) in pass.groups[g].iter().enumerate() {
                     let u = light_uniforms(key, i as u32);
-                    sum += crate::hetero::vpl_to_segment(scene, cs, &pass.media, vpl, u, self.integrator.clamp);
+                    sum +=
+                        crate::hetero::vpl_to_segment(scene, cs, &pass.media, vpl, u, self.integrator.clamp);
                 }
                 return sum;
             }

@@ -78,7 +78,12 @@ impl Integrator for VrlIntegrator {
             .tracer
             .trace(scene, seed, pass, &self.settings.trace, |s| s.vrls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
-        VrlPass { groups, surface_vpls: surface_vpls(&set), media: media(scene), hetero: crate::hetero::any(scene) }
+        VrlPass {
+            groups,
+            surface_vpls: surface_vpls(&set),
+            media: media(scene),
+            hetero: crate::hetero::any(scene),
+        }
     }
 
     fn radiance(
@@ -114,7 +119,13 @@ impl Gather for VrlGather<'_> {
             if pass.hetero {
                 let mut sum = Rgb::ZERO;
                 for (i, vrl) in pass.groups[g].iter().enumerate() {
-                    sum += crate::hetero::vrl_to_segment(scene, cs, &pass.media, vrl, light_uniforms(key, i as u32));
+                    sum += crate::hetero::vrl_to_segment(
+                        scene,
+                        cs,
+                        &pass.media,
+                        vrl,
+                        light_uniforms(key, i as u32),
+                    );
                 }
                 sum
             } else {
