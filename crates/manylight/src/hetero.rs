@@ -23,11 +23,13 @@
 use crate::camera::CameraSegment;
 use crate::gather::GatherPoint;
 use crate::vpl::{SurfaceVpl, Vpl};
+use crate::vrl::estimator::{connection_direction, contributes, point_pair_estimate, PointPair};
+use crate::vrl::sampling::{Equiangular, VrlPointSampler};
 use crate::vrl::{Segment, Vrl, VrlMedium};
 use glam::{Vec2, Vec3};
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
-use haze_scene::hetero::Heterogeneous;
+use haze_scene::hetero::{Heterogeneous, MajorantDistance};
 use haze_scene::{MediumId, Scene};
 
 /// True if any medium of the scene is heterogeneous.
@@ -89,19 +91,89 @@ pub(crate) fn connect(scene: &Scene, from: MediumId, y: Vec3, x: Vec3, s: &mut S
     transmittance_to_sampled(scene, y, None, v / dist, dist, Some(from), s)
 }
 
-/// VRL -> camera segment in a scene with heterogeneous media (T33): the joint estimator of
-/// `docs/theory.md` §4.3 with the neutral media, times the heterogeneous factors of both sides.
-pub(crate) fn vrl_to_segment(
-    scene: &Scene,
-    cs: &CameraSegment,
-    media: &[VrlMedium],
-    vrl: &Vrl,
-    u: Vec2,
-) -> Rgb {
+/// The share of the geometric strategy (`1/h`, equiangular) in the one-sample mixture with the
+/// majorant's distance (T34) on a heterogeneous segment.
+const GEOMETRIC_SHARE: f64 = 0.5;
+
+/// The majorant's distance distribution along `seg` in `h`, if it has one.
+#[inline]
+fn majorant_distance<'a>(h: Option<&'a Heterogeneous>, seg: &Segment) -> Option<MajorantDistance<'a>> {
+    h.and_then(|h| MajorantDistance::new(&h.majorants, seg.o, seg.d, seg.len))
+}
+
+/// A distance `t` on `seg` towards the point `p` and `1 / (w^2 p(t))` (`w = |seg(t) - p|`),
+/// times `min(1, c w^2)` under the clamp `c`: equiangular sampling (T8), (T9), or with the
+/// majorant's distance `maj` the one-sample mixture (T35)
+/// `p = a p_eq + (1 - a) p_maj`, for which `w^2 p = a h / Theta + (1 - a) p_maj w^2`, so the
+/// weight stays below `Theta / (a h)` (no division by a small `w`). `None` for a degenerate
+/// segment.
+fn towards(seg: &Segment, maj: Option<&MajorantDistance>, p: Vec3, u: f32, clamp: Option<f32>) -> Option<(f32, f32)> {
+    let c = seg.d.as_dvec3();
+    let r = (p - seg.o).as_dvec3();
+    let foot = r.dot(c);
+    let eq = Equiangular::new(foot, (r - foot * c).length(), 0.0, seg.len as f64)?;
+    let (t, w2p) = match maj {
+        None => {
+            let t = eq.sample(u as f64);
+            (t, eq.h / eq.span)
+        }
+        Some(m) => {
+            let a = GEOMETRIC_SHARE;
+            let u = u as f64;
+            let t = if u < a { eq.sample(u / a) } else { m.sample(((u - a) / (1.0 - a)) as f32) as f64 };
+            let t = t.clamp(0.0, seg.len as f64);
+            let w2 = eq.h * eq.h + (t - foot) * (t - foot);
+            (t, a * eq.h / eq.span + (1.0 - a) * m.pdf(t as f32) as f64 * w2)
+        }
+    };
+    let mut g = 1.0 / w2p;
+    if let Some(clamp) = clamp {
+        let w2 = eq.h * eq.h + (t - foot) * (t - foot);
+        g *= (clamp as f64 * w2).min(1.0);
+    }
+    (g.is_finite() && g > 0.0).then_some(((t as f32).min(seg.len), g as f32))
+}
+
+/// The camera side of a light point's estimate at `x = cs.seg(t)`: `sigma_s(x) T_c(t)` exactly in
+/// a homogeneous camera medium `m`, by (T31) in a heterogeneous one.
+#[inline]
+fn camera_side(cs: &CameraSegment, m: &VrlMedium, h: Option<&Heterogeneous>, x: Vec3, t: f32, s: &mut Sampler) -> Rgb {
+    match h {
+        Some(h) => along(h, &cs.seg, x, s),
+        None => m.sigma_s * m.sigma_t.exp_neg(t),
+    }
+}
+
+/// VRL -> camera segment in a scene with heterogeneous media (T33): `v` on the VRL from the `1/h`
+/// density (T6) mixed with the VRL's majorant distance (T34) when its medium is heterogeneous,
+/// then `u` on the camera segment towards `y_v` by [`towards`]; the estimate is (T33) with the
+/// mixture pdfs (T35).
+pub(crate) fn vrl_to_segment(scene: &Scene, cs: &CameraSegment, media: &[VrlMedium], vrl: &Vrl, u: Vec2) -> Rgb {
     let (cam_m, cam_h) = view(scene, &media[cs.medium as usize], cs.medium);
     let (vrl_m, vrl_h) = view(scene, &media[vrl.medium as usize], vrl.medium);
+    if !contributes(&cs.seg, &cam_m, vrl, &vrl_m) {
+        return Rgb::ZERO;
+    }
+    let Some(on_vrl) = VrlPointSampler::new(cs.seg.o, cs.seg.d, &vrl.seg) else { return Rgb::ZERO };
+    let (v, pdf_v) = match majorant_distance(vrl_h, &vrl.seg) {
+        None => on_vrl.sample_f64(u.x as f64),
+        Some(m) => {
+            let a = GEOMETRIC_SHARE;
+            let ux = u.x as f64;
+            let v = if ux < a { on_vrl.sample_f64(ux / a).0 } else { m.sample(((ux - a) / (1.0 - a)) as f32) as f64 };
+            let v = v.clamp(0.0, vrl.seg.len as f64);
+            (v, a * on_vrl.pdf_f64(v) + (1.0 - a) * m.pdf(v as f32) as f64)
+        }
+    };
+    if !(pdf_v > 0.0) {
+        return Rgb::ZERO;
+    }
+    let y = vrl.seg.at(v as f32);
+    let maj_c = majorant_distance(cam_h, &cs.seg);
+    let Some((t, g)) = towards(&cs.seg, maj_c.as_ref(), y, u.y, None) else { return Rgb::ZERO };
+    let pair = PointPair { u: t, v: v as f32, x: cs.seg.at(t), y, inv_w2_pdf: g / pdf_v as f32 };
     let mut s = tracker(u, vrl.seg.o);
-    crate::vrl::sample_vrl_contribution(&cs.seg, &cam_m, vrl, &vrl_m, u, |y, x| {
+    point_pair_estimate(&cs.seg, &cam_m, vrl, &vrl_m, &pair, |y, x| {
         let mut f = Rgb::ONE;
         if let Some(h) = vrl_h {
             f *= along(h, &vrl.seg, y, &mut s);
@@ -118,30 +190,72 @@ pub(crate) fn vrl_to_segment(
     })
 }
 
-/// VRL -> gathering surface point (T33 with the receiver's BSDF in place of the camera side).
+/// VRL -> gathering surface point (T12b with the VRL side of T33): `v` towards `x` by
+/// [`towards`] on the VRL.
 pub(crate) fn vrl_to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
     let (vrl_m, vrl_h) = view(scene, &media[vrl.medium as usize], vrl.medium);
-    let mut s = tracker(Vec2::new(u, 0.5), vrl.seg.o + gp.p);
-    crate::vrl::surface::sample_vrl_to_point(
-        gp.p,
-        |d| gp.reflectance(d),
-        vrl,
-        &vrl_m,
-        u,
-        |y, x| {
-            let f = match vrl_h {
-                Some(h) => along(h, &vrl.seg, y, &mut s),
-                None => Rgb::ONE,
-            };
-            if f.is_black() {
-                return f;
-            }
-            f * connect(scene, vrl.medium, y, x, &mut s)
-        },
-    )
+    let seg = &vrl.seg;
+    if !(seg.len > 0.0 && seg.len.is_finite()) || (vrl.flux * vrl_m.sigma_s).is_black() {
+        return Rgb::ZERO;
+    }
+    let maj = majorant_distance(vrl_h, seg);
+    let Some((v, g)) = towards(seg, maj.as_ref(), gp.p, u, None) else { return Rgb::ZERO };
+    let y = seg.at(v);
+    let n = connection_direction(gp.p - y, seg.d, seg.d.any_orthonormal_vector());
+    let f = gp.reflectance(-n);
+    if f.is_black() {
+        return Rgb::ZERO;
+    }
+    let mut s = tracker(Vec2::new(u, 0.5), seg.o + gp.p);
+    let light = match vrl_h {
+        Some(h) => along(h, seg, y, &mut s),
+        None => vrl_m.sigma_s,
+    };
+    if light.is_black() {
+        return Rgb::ZERO;
+    }
+    vrl.flux_at(vrl_m.sigma_t, v)
+        * light
+        * f
+        * connect(scene, vrl.medium, y, gp.p, &mut s)
+        * vrl_m.phase.eval(seg.d, n)
+        * g
 }
 
-/// Medium VPL -> camera segment (T33 without the VRL side: the VPL's flux holds its own
+/// A point light at `p` of intensity `intensity(n)` -> camera segment (T13, T12c with the camera
+/// side of T33): `u` towards `p` by [`towards`]; `connect(x, s)` the transmittance to `x`.
+#[allow(clippy::too_many_arguments)]
+fn point_light_to_segment(
+    scene: &Scene,
+    cs: &CameraSegment,
+    cam_medium: &VrlMedium,
+    p: Vec3,
+    intensity: impl Fn(Vec3) -> Rgb,
+    u: Vec2,
+    clamp: Option<f32>,
+    mut connect: impl FnMut(Vec3, &mut Sampler) -> Rgb,
+) -> Rgb {
+    let (cam_m, cam_h) = view(scene, cam_medium, cs.medium);
+    if cs.seg.len.is_nan() || cs.seg.len <= 0.0 || cam_m.sigma_s.is_black() {
+        return Rgb::ZERO;
+    }
+    let maj_c = majorant_distance(cam_h, &cs.seg);
+    let Some((t, g)) = towards(&cs.seg, maj_c.as_ref(), p, u.x, clamp) else { return Rgb::ZERO };
+    let x = cs.seg.at(t);
+    let n = connection_direction(x - p, cs.seg.d, cs.seg.d.any_orthonormal_vector());
+    let i = intensity(n);
+    if i.is_black() {
+        return Rgb::ZERO;
+    }
+    let mut s = tracker(u, p);
+    let cam = camera_side(cs, &cam_m, cam_h, x, t, &mut s);
+    if cam.is_black() {
+        return Rgb::ZERO;
+    }
+    i * cam * connect(x, &mut s) * cam_m.phase.eval(n, -cs.seg.d) * g
+}
+
+/// Medium VPL -> camera segment (T13 with the camera side of T33: the VPL's flux holds its own
 /// `sigma_s`).
 pub(crate) fn vpl_to_segment(
     scene: &Scene,
@@ -151,18 +265,13 @@ pub(crate) fn vpl_to_segment(
     u: Vec2,
     clamp: Option<f32>,
 ) -> Rgb {
-    let (cam_m, cam_h) = view(scene, &media[cs.medium as usize], cs.medium);
-    let mut s = tracker(u, vpl.p);
+    if vpl.flux.is_black() {
+        return Rgb::ZERO;
+    }
     let phase = &media[vpl.medium as usize].phase;
-    crate::vpl::sample_vpl_contribution(&cs.seg, &cam_m, vpl, phase, u.x, clamp, |y, x| {
-        let f = match cam_h {
-            Some(h) => along(h, &cs.seg, x, &mut s),
-            None => Rgb::ONE,
-        };
-        if f.is_black() {
-            return f;
-        }
-        f * connect(scene, vpl.medium, y, x, &mut s)
+    let cam_medium = &media[cs.medium as usize];
+    point_light_to_segment(scene, cs, cam_medium, vpl.p, |n| vpl.flux * phase.eval(vpl.d_in, n), u, clamp, |x, s| {
+        connect(scene, vpl.medium, vpl.p, x, s)
     })
 }
 
@@ -175,32 +284,42 @@ pub(crate) fn surface_vpl_to_segment(
     u: Vec2,
     clamp: Option<f32>,
 ) -> Rgb {
-    let (cam_m, cam_h) = view(scene, cam_medium, cs.medium);
-    let mut s = tracker(u, vpl.p);
     let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-    crate::vpl::sample_point_light_to_segment(
-        &cs.seg,
-        &cam_m,
-        vpl.p,
-        |w| vpl.intensity(bsdf, w),
-        u.x,
-        clamp,
-        |_, x| {
-            let f = match cam_h {
-                Some(h) => along(h, &cs.seg, x, &mut s),
-                None => Rgb::ONE,
-            };
-            if f.is_black() {
-                return f;
-            }
-            let v = x - vpl.p;
-            let dist = v.length();
-            if dist <= 0.0 {
-                return Rgb::ZERO;
-            }
-            let d = v / dist;
-            let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
-            f * transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, &mut s)
-        },
-    )
+    point_light_to_segment(scene, cs, cam_medium, vpl.p, |w| vpl.intensity(bsdf, w), u, clamp, |x, s| {
+        let v = x - vpl.p;
+        let dist = v.length();
+        if dist <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let d = v / dist;
+        let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+        transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, s)
+    })
+}
+
+/// A distance on the camera segment for single scattering towards the light point `p`, on
+/// `[a, b]` (the spot's interval) or, mixed with the camera medium's majorant distance (T35),
+/// anywhere on the segment; with its pdf. `None` if none exists.
+pub(crate) fn single_distance(
+    h: &Heterogeneous,
+    seg: &Segment,
+    p: Vec3,
+    ab: (f32, f32),
+    u: f32,
+) -> Option<(f32, f32)> {
+    let delta = (p - seg.o).dot(seg.d);
+    let dist = (p - seg.at(delta)).length();
+    let (a, b) = ab;
+    let eq_pdf = |t: f32| crate::vrl::sampling::equiangular_pdf(t, delta, dist, a, b);
+    let Some(m) = MajorantDistance::new(&h.majorants, seg.o, seg.d, seg.len) else {
+        let t = crate::vrl::sampling::sample_equiangular(u, delta, dist, a, b)?;
+        return Some((t, eq_pdf(t)));
+    };
+    let share = GEOMETRIC_SHARE as f32;
+    let t = if u < share {
+        crate::vrl::sampling::sample_equiangular(u / share, delta, dist, a, b)?
+    } else {
+        m.sample((u - share) / (1.0 - share))
+    };
+    Some((t, share * eq_pdf(t) + (1.0 - share) * m.pdf(t)))
 }

@@ -50,11 +50,20 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
             },
             _ => (0.0, cs.seg.len),
         };
-        // Equiangular parameters of the light point seen from the camera segment.
-        let delta = (light.p - cs.seg.o).dot(cs.seg.d);
-        let h = (light.p - cs.seg.at(delta)).length();
-        let Some(u) = sample_equiangular(u_dist, delta, h, a, b) else { continue };
-        let pdf = equiangular_pdf(u, delta, h, a, b);
+        let (u, pdf) = match &hetero {
+            None => {
+                // Equiangular parameters of the light point seen from the camera segment.
+                let delta = (light.p - cs.seg.o).dot(cs.seg.d);
+                let h = (light.p - cs.seg.at(delta)).length();
+                let Some(u) = sample_equiangular(u_dist, delta, h, a, b) else { continue };
+                (u, equiangular_pdf(u, delta, h, a, b))
+            }
+            // Mixed with the majorant's distance (docs/theory.md §12.5, (T35)).
+            Some(h) => match crate::hetero::single_distance(h, &cs.seg, light.p, (a, b), u_dist) {
+                Some(up) => up,
+                None => continue,
+            },
+        };
         if pdf.is_nan() || pdf <= 0.0 {
             continue;
         }

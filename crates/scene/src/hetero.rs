@@ -190,6 +190,70 @@ impl Iterator for MajorantIter<'_> {
     }
 }
 
+/// The distance to the first tentative collision of the grey majorant `mu = max_c sigma_maj,c`
+/// along `o + t d`, `t` in `[0, len]`, conditioned on one before `len`:
+/// `p(t) = mu(t) exp(-int_0^t mu) / (1 - exp(-int_0^len mu))` (`docs/theory.md` §12.5, (T34)).
+/// A homogeneous proxy of the medium along one segment that follows where its majorant lies:
+/// the many-light estimators mix it into their geometric distance sampling.
+#[derive(Clone, Copy, Debug)]
+pub struct MajorantDistance<'a> {
+    grid: &'a MajorantGrid,
+    o: Vec3,
+    d: Vec3,
+    len: f32,
+    /// `int_0^len mu`.
+    total: f32,
+    /// `1 - exp(-total)`.
+    norm: f32,
+}
+
+impl<'a> MajorantDistance<'a> {
+    /// `None` when the majorant's optical depth over the segment is zero or not finite.
+    pub fn new(grid: &'a MajorantGrid, o: Vec3, d: Vec3, len: f32) -> Option<Self> {
+        let total: f32 = grid.segments(o, d, 0.0, len).map(|g| g.sigma_maj.max_component() * (g.t1 - g.t0)).sum();
+        let norm = -(-total).exp_m1();
+        (total > 0.0 && total.is_finite() && norm > 0.0).then_some(MajorantDistance { grid, o, d, len, total, norm })
+    }
+
+    /// `t` from `p` by inversion: the optical depth `-ln(1 - u norm)`, found cell by cell.
+    pub fn sample(&self, u: f32) -> f32 {
+        let target = -(-u * self.norm).ln_1p().min(self.total);
+        let mut acc = 0.0f32;
+        let mut last = 0.0f32;
+        for g in self.grid.segments(self.o, self.d, 0.0, self.len) {
+            let mu = g.sigma_maj.max_component();
+            let depth = mu * (g.t1 - g.t0);
+            if mu > 0.0 && acc + depth >= target {
+                return (g.t0 + (target - acc) / mu).clamp(g.t0, g.t1);
+            }
+            acc += depth;
+            if mu > 0.0 {
+                last = g.t1;
+            }
+        }
+        last
+    }
+
+    /// `p(t)`, per unit length (0 outside `[0, len]` and where `mu` is 0).
+    pub fn pdf(&self, t: f32) -> f32 {
+        if !(0.0..=self.len).contains(&t) {
+            return 0.0;
+        }
+        let (mut tau, mut mu_t) = (0.0f32, 0.0f32);
+        for g in self.grid.segments(self.o, self.d, 0.0, t) {
+            let mu = g.sigma_maj.max_component();
+            tau += mu * (g.t1 - g.t0);
+            mu_t = mu;
+        }
+        // `mu(t)` is the last cell's only if that cell reaches `t` (else `t` is past the box).
+        let p = self.o + self.d * t;
+        if !(p.cmpge(self.grid.lo).all() && p.cmple(self.grid.hi).all()) {
+            return 0.0;
+        }
+        mu_t * (-tau).exp() / self.norm
+    }
+}
+
 /// Outcome of delta tracking along a segment, in the path-level spectral MIS form of
 /// `haze_core::transmittance` (`docs/theory.md` §12.3).
 #[derive(Clone, Copy, Debug)]
