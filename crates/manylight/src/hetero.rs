@@ -1,16 +1,19 @@
-//! Heterogeneous media in the many-light estimators (`docs/theory.md` §12.5, (T31)-(T33)).
+//! Heterogeneous media in the many-light estimators (`docs/theory.md` §12.5, (T31)-(T35)).
 //!
 //! The joint sampling of the VRL estimator (`1/h` on the VRL, then equiangular on the camera
 //! segment) and the equiangular sampling of the VPL, surface-VPL and VRL-to-point estimators
 //! depend on geometry only, never on the medium, so they stay exact (normalised densities whose
-//! pdfs the estimators divide by) in any medium. What a heterogeneous medium changes is the
+//! pdfs the estimators divide by) in any medium. On a heterogeneous segment each distance is
+//! drawn from the one-sample mixture (T35) of that geometric density and the majorant's
+//! distance (T34), a homogeneous proxy that follows where the medium is, for variance only (the
+//! estimate divides by the mixture pdf). What a heterogeneous medium changes is the
 //! integrand: `sigma_s` at the sampled points and the transmittances along the camera segment,
 //! along the VRL and on the connection, which have no closed form. Each is replaced by an
 //! unbiased estimate: `sigma_s(x)` is evaluated exactly, each transmittance by ratio tracking
 //! (T30) with random numbers of its own; independent unbiased estimates multiply to an unbiased
 //! estimate of the product (T32), so the estimators stay unbiased.
 //!
-//! To reuse the homogeneous estimators unchanged, a heterogeneous medium is passed to them as
+//! To reuse the homogeneous estimator's second stage (`point_pair_estimate`) unchanged, a heterogeneous medium is passed to them as
 //! the *neutral* medium (`sigma_s = 1`, `sigma_t = 0`, its phase function): every homogeneous
 //! factor is then 1, and the connection callback, which sees both sampled points, multiplies in
 //! the heterogeneous factors `sigma_s(x) T(0, u)` of each side ([`along`]). The pass-level media
@@ -107,7 +110,13 @@ fn majorant_distance<'a>(h: Option<&'a Heterogeneous>, seg: &Segment) -> Option<
 /// `p = a p_eq + (1 - a) p_maj`, for which `w^2 p = a h / Theta + (1 - a) p_maj w^2`, so the
 /// weight stays below `Theta / (a h)` (no division by a small `w`). `None` for a degenerate
 /// segment.
-fn towards(seg: &Segment, maj: Option<&MajorantDistance>, p: Vec3, u: f32, clamp: Option<f32>) -> Option<(f32, f32)> {
+fn towards(
+    seg: &Segment,
+    maj: Option<&MajorantDistance>,
+    p: Vec3,
+    u: f32,
+    clamp: Option<f32>,
+) -> Option<(f32, f32)> {
     let c = seg.d.as_dvec3();
     let r = (p - seg.o).as_dvec3();
     let foot = r.dot(c);
@@ -137,7 +146,14 @@ fn towards(seg: &Segment, maj: Option<&MajorantDistance>, p: Vec3, u: f32, clamp
 /// The camera side of a light point's estimate at `x = cs.seg(t)`: `sigma_s(x) T_c(t)` exactly in
 /// a homogeneous camera medium `m`, by (T31) in a heterogeneous one.
 #[inline]
-fn camera_side(cs: &CameraSegment, m: &VrlMedium, h: Option<&Heterogeneous>, x: Vec3, t: f32, s: &mut Sampler) -> Rgb {
+fn camera_side(
+    cs: &CameraSegment,
+    m: &VrlMedium,
+    h: Option<&Heterogeneous>,
+    x: Vec3,
+    t: f32,
+    s: &mut Sampler,
+) -> Rgb {
     match h {
         Some(h) => along(h, &cs.seg, x, s),
         None => m.sigma_s * m.sigma_t.exp_neg(t),
@@ -148,7 +164,13 @@ fn camera_side(cs: &CameraSegment, m: &VrlMedium, h: Option<&Heterogeneous>, x: 
 /// density (T6) mixed with the VRL's majorant distance (T34) when its medium is heterogeneous,
 /// then `u` on the camera segment towards `y_v` by [`towards`]; the estimate is (T33) with the
 /// mixture pdfs (T35).
-pub(crate) fn vrl_to_segment(scene: &Scene, cs: &CameraSegment, media: &[VrlMedium], vrl: &Vrl, u: Vec2) -> Rgb {
+pub(crate) fn vrl_to_segment(
+    scene: &Scene,
+    cs: &CameraSegment,
+    media: &[VrlMedium],
+    vrl: &Vrl,
+    u: Vec2,
+) -> Rgb {
     let (cam_m, cam_h) = view(scene, &media[cs.medium as usize], cs.medium);
     let (vrl_m, vrl_h) = view(scene, &media[vrl.medium as usize], vrl.medium);
     if !contributes(&cs.seg, &cam_m, vrl, &vrl_m) {
@@ -160,12 +182,16 @@ pub(crate) fn vrl_to_segment(scene: &Scene, cs: &CameraSegment, media: &[VrlMedi
         Some(m) => {
             let a = GEOMETRIC_SHARE;
             let ux = u.x as f64;
-            let v = if ux < a { on_vrl.sample_f64(ux / a).0 } else { m.sample(((ux - a) / (1.0 - a)) as f32) as f64 };
+            let v = if ux < a {
+                on_vrl.sample_f64(ux / a).0
+            } else {
+                m.sample(((ux - a) / (1.0 - a)) as f32) as f64
+            };
             let v = v.clamp(0.0, vrl.seg.len as f64);
             (v, a * on_vrl.pdf_f64(v) + (1.0 - a) * m.pdf(v as f32) as f64)
         }
     };
-    if !(pdf_v > 0.0) {
+    if pdf_v.is_nan() || pdf_v <= 0.0 {
         return Rgb::ZERO;
     }
     let y = vrl.seg.at(v as f32);
@@ -270,9 +296,16 @@ pub(crate) fn vpl_to_segment(
     }
     let phase = &media[vpl.medium as usize].phase;
     let cam_medium = &media[cs.medium as usize];
-    point_light_to_segment(scene, cs, cam_medium, vpl.p, |n| vpl.flux * phase.eval(vpl.d_in, n), u, clamp, |x, s| {
-        connect(scene, vpl.medium, vpl.p, x, s)
-    })
+    point_light_to_segment(
+        scene,
+        cs,
+        cam_medium,
+        vpl.p,
+        |n| vpl.flux * phase.eval(vpl.d_in, n),
+        u,
+        clamp,
+        |x, s| connect(scene, vpl.medium, vpl.p, x, s),
+    )
 }
 
 /// Surface VPL -> camera segment (T12c with the camera side of T33).
@@ -285,16 +318,25 @@ pub(crate) fn surface_vpl_to_segment(
     clamp: Option<f32>,
 ) -> Rgb {
     let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
-    point_light_to_segment(scene, cs, cam_medium, vpl.p, |w| vpl.intensity(bsdf, w), u, clamp, |x, s| {
-        let v = x - vpl.p;
-        let dist = v.length();
-        if dist <= 0.0 {
-            return Rgb::ZERO;
-        }
-        let d = v / dist;
-        let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
-        transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, s)
-    })
+    point_light_to_segment(
+        scene,
+        cs,
+        cam_medium,
+        vpl.p,
+        |w| vpl.intensity(bsdf, w),
+        u,
+        clamp,
+        |x, s| {
+            let v = x - vpl.p;
+            let dist = v.length();
+            if dist <= 0.0 {
+                return Rgb::ZERO;
+            }
+            let d = v / dist;
+            let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+            transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, s)
+        },
+    )
 }
 
 /// A distance on the camera segment for single scattering towards the light point `p`, on
