@@ -218,8 +218,8 @@ fn walk_chain(
                     *beta *= transmittance(scene.medium(m).sigma_t, len);
                 }
                 Some(h) => {
-                    // The gathering segment is the part inside the medium's box (the medium is
-                    // empty outside it, T27, so the throughput at the box is `beta`); the walk
+                    // The gathering segment is the part where the majorant is positive (the
+                    // medium is empty elsewhere, T27, T28, so the throughput there is `beta`); the walk
                     // goes on with a ratio-tracking estimate of the interval's transmittance
                     // (T30), independent of the estimates on the segment (docs/theory.md §12.5).
                     if *gathering && chain.len() < MAX_SEGMENTS {

@@ -24,7 +24,8 @@
 //! (`haze_scene::hetero::Heterogeneous::sample_free_flight`, the same weights as `volpath`), and
 //! a VPL sits at every real collision with flux `beta sigma_s(x) / mean(r)` (`sigma_s(x)` is in
 //! the flight's weight). The VRL is not the sampled piece: it is the whole segment up to the
-//! next surface, clipped to the medium's box (the medium is empty outside it), with
+//! next surface, clipped to the majorant cells with a positive bound (the medium is empty
+//! elsewhere: `Heterogeneous::clip`), with
 //! `ratio = 0` and `beta` the light leaving its start, `beta / mean(r)`; the light at distance
 //! `v` is `beta T(0, v)` with the medium's transmittance, which the estimators estimate by ratio
 //! tracking along the VRL (`crate::hetero`). Its point at `v` exists with probability 1, so no
@@ -265,8 +266,9 @@ fn trace_one(
         if let Some(m) = medium {
             let med = scene.medium(m);
             if let Some(h) = &med.hetero {
-                // Heterogeneous (module docs): one VRL over the whole segment inside the medium's
-                // box, carrying `T(0, v)` along itself, then delta tracking for the next vertex.
+                // Heterogeneous (module docs): one VRL over the whole segment where the medium
+                // is (`clip`), carrying `T(0, v)` along itself, then delta tracking for the next
+                // vertex.
                 if let Some((a, b)) = h.clip(ray.o, ray.d, 0.0, t_surface.min(max_len)) {
                     out.vrls.push(VrlRecord {
                         o: ray.at(a),

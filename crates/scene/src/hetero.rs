@@ -297,13 +297,18 @@ impl Heterogeneous {
         (sigma_t, sigma_t * self.albedo.eval(p))
     }
 
-    /// The part `[a, b]` of `[t0, t1]` where the ray `o + t d` is inside the medium's box, if
-    /// any: outside it the medium is empty (T27), so segments can be clipped to it.
+    /// The part `[a, b]` of `[t0, t1]` from the first to the last majorant cell with a
+    /// positive bound that the ray `o + t d` crosses, if any: outside it the medium is empty
+    /// (outside the box by (T27), in a cell of zero majorant because the majorant bounds
+    /// `sigma_t`), so segments can be clipped to it.
     pub fn clip(&self, o: Vec3, d: Vec3, t0: f32, t1: f32) -> Option<(f32, f32)> {
-        let mut segs = self.majorants.segments(o, d, t0, t1);
-        let first = segs.next()?;
-        let last = segs.last().unwrap_or(first);
-        (first.t0 < last.t1).then_some((first.t0, last.t1))
+        let mut span: Option<(f32, f32)> = None;
+        for g in self.majorants.segments(o, d, t0, t1) {
+            if g.t1 > g.t0 && g.sigma_maj.max_component() > 0.0 {
+                span = Some((span.map_or(g.t0, |s| s.0), g.t1));
+            }
+        }
+        span
     }
 
     /// The mean of the majorant cells, per channel: the homogeneous proxy of the medium that
