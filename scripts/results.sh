@@ -7,9 +7,11 @@
 #     REF_METHOD=volpath gives the old references),
 #   - the validation scenes (tests/data/validation) against their Mitsuba 3 references,
 #   - the benchmark scenes at 640x360 (WIDE_*), where light tracing amortises over more pixels;
-#   - whole images with lit surfaces and glass (WHOLE_*): scenes/glass-beam.xml (320x240) and
-#     tests/data/glass-ball-room.xml (256x192), against REF_METHOD references (volpath cannot
-#     find the spot's caustic through the ball, so it cannot be the reference there);
+#   - whole images with lit surfaces and glass (WHOLE_*): scenes/glass-beam.xml (320x240),
+#     tests/data/glass-ball-room.xml (256x192) and scenes/cbox-fog.xml (512x512), against
+#     REF_METHOD references (volpath cannot find the spot's caustic through the ball, so it cannot
+#     be the reference there), with volpath's error split into bias and noise
+#     (scripts/bias-noise.py, with $PYTHON if it has numpy and OpenEXR);
 #   - the heterogeneous smoke plume (PLUME_*): scenes/smoke-plume.xml at PLUME_RES, every method
 #     against a volpath reference (volpath is the method to beat in heterogeneous media, and its
 #     reference has no many-light method's correlated noise);
@@ -57,6 +59,7 @@ PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:100
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
 DOC=${DOC:-docs/results.md}
+PYTHON=${PYTHON:-python3}
 
 # compare NAME SCENE REFERENCE BUDGET "DEFINES" METHOD... [-- METHOD...]: runs every seed into
 # $OUT/NAME (the methods before "--" with one sample per pass, those after it with their auto
@@ -155,15 +158,27 @@ for part in $PARTS; do
       done
       ;;
     whole)
-      for s in glass-beam glass-ball-room; do
-        if [ "$s" = glass-beam ]; then scene=scenes/glass-beam.xml defines="" size=320x240
-        else scene=tests/data/glass-ball-room.xml defines="-D res=256 -D res_y=192" size=256x192; fi
+      for s in ${WHOLE_SCENES:-glass-beam glass-ball-room cbox-fog}; do
+        case $s in
+          glass-beam) scene=scenes/glass-beam.xml defines="" size=320x240 ;;
+          glass-ball-room) scene=tests/data/glass-ball-room.xml defines="-D res=256 -D res_y=192" size=256x192 ;;
+          cbox-fog) scene=scenes/cbox-fog.xml defines="" size=512x512 ;;
+          *) echo "unknown whole-image scene '$s'" >&2; exit 1 ;;
+        esac
         ref=$OUT/whole/$s/reference.exr
         reference "$scene" "$ref" "$WHOLE_REF_TIME" "$defines"
         start_load=$(load)
         table=$(compare "whole/$s" "$scene" "$ref" "$WHOLE_BUDGET" "$defines" "${WHOLE_METHODS[@]}")
         printf '\n## %s (whole image), %s, %s s per method\n\n`%s`, `%s` reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
           "$s" "$size" "$WHOLE_BUDGET" "$scene" "$REF_METHOD" "$WHOLE_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+        images=()
+        for seed in $SEEDS; do images+=("$OUT/whole/$s/images-$seed/volpath.exr"); done
+        if "$PYTHON" -c 'import numpy, OpenEXR' 2>/dev/null; then
+          printf -- '- volpath against the reference (scripts/bias-noise.py): %s\n' \
+            "$("$PYTHON" scripts/bias-noise.py "$ref" "${images[@]}")" >> "$DOC.tmp"
+        else
+          echo "- volpath's bias/noise split skipped: $PYTHON has no numpy and OpenEXR" >> "$DOC.tmp"
+        fi
       done
       ;;
     plume)

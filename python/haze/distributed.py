@@ -142,6 +142,7 @@ def render(
     components: bool = False,
     vrls: int | None = None,
     light_paths: int | None = None,
+    caustic_paths: int | None = None,
     vpl_clamp: float | None = None,
     clamp: float | None = None,
     cut: str | None = None,
@@ -179,7 +180,7 @@ def render(
     Args:
         scene_path: the scene file on the driver; it and every file it reads are shipped to
             the workers through the object store.
-        integrator, spp, time, seed, spp_per_pass, components, vrls, light_paths, vpl_clamp,
+        integrator, spp, time, seed, spp_per_pass, components, vrls, light_paths, caustic_paths, vpl_clamp,
             clamp, cut, cut_size, light_samples, epsilon, max_cut, bound, builder: as in :meth:`haze.Scene.render` (the engine's
             options, :data:`haze.OPTIONS`).
         defaults: ``<default>`` overrides of the scene (``-D name=value``).

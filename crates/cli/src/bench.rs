@@ -220,8 +220,11 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
                             strategy: CutStrategy::Bound,
                             ..Default::default()
                         };
-                        let ml =
-                            ManyLightSettings { budget: LightBudget::Paths(paths), trace: trace.clone() };
+                        let ml = ManyLightSettings {
+                            budget: LightBudget::Paths(paths),
+                            trace: trace.clone(),
+                            caustic_paths: None,
+                        };
                         let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, 0)?;
                         let settings = RenderSettings { spp: 1, ..Default::default() };
                         let out = render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});
@@ -250,7 +253,11 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
             continue;
         }
         // Frame time: vrl_lightcuts 100k against vrl 10k, 1 spp, all threads.
-        let ml = |vrls| ManyLightSettings { budget: LightBudget::Vrls(vrls), trace: trace.clone() };
+        let ml = |vrls| ManyLightSettings {
+            budget: LightBudget::Vrls(vrls),
+            trace: trace.clone(),
+            caustic_paths: None,
+        };
         let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(100_000), LightcutSettings::default(), 0)?;
         let lc_secs = frame_seconds(&scene, &lc);
         let vrl_secs = frame_seconds(&scene, &VrlIntegrator::new(&scene, ml(10_000), 0)?);
@@ -292,7 +299,8 @@ fn cut_growth() -> Result<()> {
         let mut row = String::new();
         let mut lights = 0.0;
         for bound in [BoundKind::Paper, BoundKind::Tight] {
-            let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+            let ml =
+                ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone(), caustic_paths: None };
             let lc = LightcutSettings {
                 bound,
                 cut: CutSettings { max_cut: u32::MAX, ..Default::default() },
@@ -335,6 +343,7 @@ fn bench_vrl(options: &Options, scenes: &[PathBuf]) -> Result<()> {
         let ml = ManyLightSettings {
             budget: options.method.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+            caustic_paths: None,
         };
         let integrator = VrlIntegrator::new(&scene, ml, 0)?;
         let t0 = Instant::now();
@@ -428,7 +437,8 @@ fn bench_stochastic(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         let mut prepared = Vec::new();
         let mut n = 10_000u64;
         while n <= args.max_vrls {
-            let ml = ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone() };
+            let ml =
+                ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone(), caustic_paths: None };
             let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, options.method.lightcuts, 0)?;
             let data = integ.begin_pass(&scene, 0, 0);
             prepared.push((integ, data));

@@ -56,6 +56,7 @@ impl Method {
         let many_light = || ManyLightSettings {
             budget: options.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+            caustic_paths: options.caustic_paths,
         };
         // Name the method in a refusal (e.g. an environment emitter): "integrator 'vrl': ...".
         let named = |e: haze_scene::lights::EmissionError| anyhow!("integrator '{kind}': {e}");

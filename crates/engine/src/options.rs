@@ -451,6 +451,25 @@ pub const OPTIONS: &[OptionSpec] = &[
         },
     },
     OptionSpec {
+        name: "caustic_paths",
+        kind: Kind::Integer,
+        default: Default::Unset(
+            "auto: one per pixel (of 0.25, 1 and 4 per pixel at 320x240, 1 gave the least \
+             variance per time on glass-beam; docs/lightcuts.md \"Caustics seen directly\")",
+        ),
+        help: "Caustic paths per pass: light paths aimed at the glass (delta) surfaces and \
+               connected to the camera, which render the caustics the camera sees directly \
+               (light through glass into the haze or onto a wall); 0 leaves them to the camera \
+               path, which cannot find those of point and spot lights (docs/theory.md 2.1).",
+        applies_to: MethodKind::MANY_LIGHT,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "20000",
+        set: |o, v| o.method.caustic_paths = Some(v.int()),
+        get: |o| o.method.caustic_paths.map(|n| n.to_string()),
+    },
+    OptionSpec {
         name: "vpl_clamp",
         kind: Kind::Positive,
         default: Default::Unset("off"),
@@ -631,6 +650,8 @@ pub struct MethodOptions {
     /// vrl and vpl: clamp of the `1/d^2` of surface connections (biased).
     pub clamp: Option<f32>,
     pub lightcuts: LightcutSettings,
+    /// Caustic paths per pass (`None`: one per pixel; 0: the camera continuation instead).
+    pub caustic_paths: Option<u64>,
 }
 
 /// What every pass of a range shares (`crate::passes`).
@@ -698,6 +719,7 @@ impl Options {
                 vpl_clamp: None,
                 clamp: None,
                 lightcuts: LightcutSettings::default(),
+                caustic_paths: None,
             },
         };
         for spec in OPTIONS {

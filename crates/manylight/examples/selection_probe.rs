@@ -63,6 +63,7 @@ fn main() {
         let ml = ManyLightSettings {
             budget: LightBudget::Vrls(vrls),
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+            caustic_paths: None,
         };
         let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, settings, 0)
             .unwrap_or_else(|e| fail(&format!("{path}: {e}")));

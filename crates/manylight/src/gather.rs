@@ -48,16 +48,31 @@ pub(crate) trait Gather {
     /// A gathering point's light from every virtual light (all of it `surface`), without the
     /// camera path's throughput.
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb;
+    /// True if light tracing splats the caustics seen directly (`crate::splat`), so that the
+    /// continuation must not count them; false only in tests that compare the two strategies.
+    fn splats_caustics(&self) -> bool {
+        true
+    }
 }
 
 thread_local! {
-    /// Per-thread gathering segments of the current chain, with "the camera path had a
-    /// surface event before it": the hot loop allocates nothing.
-    static CHAIN: RefCell<Vec<(CameraSegment, bool)>> = RefCell::new(Vec::with_capacity(MAX_SEGMENTS));
+    /// Per-thread gathering segments of the current chain: the hot loop allocates nothing.
+    static CHAIN: RefCell<Vec<ChainSegment>> = RefCell::new(Vec::with_capacity(MAX_SEGMENTS));
 }
 
 /// Camera-path events (delta surfaces and continuations) after which Russian roulette starts.
 const RR_EVENTS: u32 = 8;
+
+/// A gathering segment of a chain.
+#[derive(Clone, Copy)]
+struct ChainSegment {
+    cs: CameraSegment,
+    /// The camera path had a surface event before it (its light is `surface`).
+    after_surface: bool,
+    /// The camera sees it directly (`whole_path_radiance`'s `direct`): the continuation from
+    /// its points leaves area emitters behind delta chains to light tracing.
+    direct: bool,
+}
 
 /// How a chain ended.
 enum ChainEnd {
@@ -81,6 +96,12 @@ pub(crate) fn whole_path_radiance(
     let mut surface_seen = false;
     let mut gathering = true;
     let mut events = 0u32;
+    // The camera sees the chain's end directly (no delta sample but thin sheets' straight
+    // crossings): only the first chain, until a delta sample changes the direction.
+    let mut direct = true;
+    // The continued chain after a directly seen gathering point: its area emitters are light
+    // tracing's (`crate::splat`), not counted here.
+    let mut skip_area_emitters = false;
     CHAIN.with_borrow_mut(|chain| loop {
         chain.clear();
         let end = walk_chain(
@@ -91,12 +112,16 @@ pub(crate) fn whole_path_radiance(
             &mut beta,
             &mut surface_seen,
             &mut gathering,
+            &mut direct,
+            skip_area_emitters,
             &mut events,
             max_events,
             chain,
             &mut out,
         );
-        for (cs, after_surface) in chain.iter() {
+        let seen_directly = std::mem::replace(&mut direct, false);
+        skip_area_emitters = false;
+        for ChainSegment { cs, after_surface, .. } in chain.iter() {
             let single = crate::single::single_scattering(scene, cs, sampler);
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
             let [medium_only, after] = gather.segment(cs, key);
@@ -118,14 +143,14 @@ pub(crate) fn whole_path_radiance(
             let shape = &scene.shapes[h.shape as usize];
             let frame = Frame::from_normal(h.ns);
             let wi = frame.to_local(-ray.d);
-            let direct = surface_nee(scene, sampler, h, &frame, wi, medium, SurfaceMis::None);
+            let nee = surface_nee(scene, sampler, h, &frame, wi, medium, SurfaceMis::None);
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
             let gp = GatherPoint { p: h.p, n: h.n, frame, wi, bsdf: &shape.bsdf, uv: h.uv };
-            out.add(Component::Surface, beta * (direct + gather.point(&gp, key)));
+            out.add(Component::Surface, beta * (nee + gather.point(&gp, key)));
             frame_wi = Some((frame, wi));
         }
         // Continue from one gathering vertex of the chain, chosen uniformly.
-        let scattering = chain.iter().filter(|(cs, _)| !scene.medium(cs.medium).sigma_s().is_black()).count();
+        let scattering = chain.iter().filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black()).count();
         let candidates = scattering + hit.is_some() as usize;
         if candidates == 0 || events + 1 >= max_events {
             return out;
@@ -134,11 +159,12 @@ pub(crate) fn whole_path_radiance(
         let k = ((sampler.next_1d() * candidates as f32) as usize).min(candidates - 1);
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
         if k < scattering {
-            let (cs, after_surface) = *chain
+            let ChainSegment { cs, after_surface, direct: seen } = *chain
                 .iter()
-                .filter(|(cs, _)| !scene.medium(cs.medium).sigma_s().is_black())
+                .filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black())
                 .nth(k)
                 .expect("k < count");
+            skip_area_emitters = seen && gather.splats_caustics();
             // A uniform point of the segment, pdf 1/len; phase sampling is exact (weight 1).
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
@@ -161,6 +187,7 @@ pub(crate) fn whole_path_radiance(
             ray = Ray::new(cs.seg.at(u), d);
             medium = Some(cs.medium);
         } else {
+            skip_area_emitters = seen_directly && gather.splats_caustics();
             let (Some(h), Some((frame, wi))) = (hit, frame_wi) else { return out };
             let shape = &scene.shapes[h.shape as usize];
             let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return out };
@@ -185,8 +212,9 @@ pub(crate) fn whole_path_radiance(
 }
 
 /// Walks one chain from `ray` through null boundaries and delta surfaces. While `gathering`,
-/// every medium interval goes into `chain` and emitters met are added to `out`; a delta surface
-/// sample that is not `null` (straight through a thin sheet) turns gathering on.
+/// every medium interval goes into `chain` and emitters met are added to `out` (area emitters
+/// not under `skip_area_emitters`); a delta surface sample that is not `null` (straight through
+/// a thin sheet) turns gathering on and `direct` off.
 #[allow(clippy::too_many_arguments)]
 fn walk_chain(
     scene: &Scene,
@@ -196,9 +224,11 @@ fn walk_chain(
     beta: &mut Rgb,
     surface_seen: &mut bool,
     gathering: &mut bool,
+    direct: &mut bool,
+    skip_area_emitters: bool,
     events: &mut u32,
     max_events: u32,
-    chain: &mut Vec<(CameraSegment, bool)>,
+    chain: &mut Vec<ChainSegment>,
     out: &mut PathRadiance,
 ) -> ChainEnd {
     for _ in 0..10_000 {
@@ -213,7 +243,7 @@ fn walk_chain(
                             medium: m,
                             tr_before: *beta,
                         };
-                        chain.push((cs, *surface_seen));
+                        chain.push(ChainSegment { cs, after_surface: *surface_seen, direct: *direct });
                     }
                     *beta *= transmittance(scene.medium(m).sigma_t, len);
                 }
@@ -225,7 +255,8 @@ fn walk_chain(
                     if *gathering && chain.len() < MAX_SEGMENTS {
                         if let Some((a, b)) = h.clip(ray.o, ray.d, 0.0, len) {
                             let seg = Segment::new(ray.at(a), ray.d, b - a);
-                            chain.push((CameraSegment { seg, medium: m, tr_before: *beta }, *surface_seen));
+                            let cs = CameraSegment { seg, medium: m, tr_before: *beta };
+                            chain.push(ChainSegment { cs, after_surface: *surface_seen, direct: *direct });
                         }
                     }
                     *beta *= h.transmittance(ray.o, ray.d, 0.0, len, sampler);
@@ -239,7 +270,7 @@ fn walk_chain(
             }
             return ChainEnd::Stop;
         };
-        if *gathering {
+        if *gathering && !skip_area_emitters {
             if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -ray.d) {
                 out.add(emitted, *beta * le);
             }
@@ -267,6 +298,7 @@ fn walk_chain(
         *surface_seen = true;
         if !bs.null {
             *gathering = true;
+            *direct = false;
         }
         let d = frame.to_world(bs.wo);
         *medium = shape.medium_towards(d, h.n, *medium);

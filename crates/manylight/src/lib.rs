@@ -12,6 +12,7 @@ pub mod integrators;
 pub mod lighttrace;
 mod memory;
 pub mod single;
+pub mod splat;
 pub mod tree;
 pub mod vpl;
 pub mod vrl;

@@ -39,7 +39,7 @@ use haze_core::ray::offset_origin;
 use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_scene::hetero::Flight;
-use haze_scene::lights::EmissionError;
+use haze_scene::lights::{EmissionError, EmissionSample};
 use haze_scene::{MediumId, Scene};
 use rayon::prelude::*;
 
@@ -141,6 +141,23 @@ pub struct SurfaceVplRecord {
     pub medium: Option<MediumId>,
 }
 
+impl SurfaceVplRecord {
+    /// The surface VPL the estimators take.
+    pub fn to_surface_vpl(&self) -> crate::vpl::SurfaceVpl {
+        let frame = haze_core::Frame::from_normal(self.ns);
+        crate::vpl::SurfaceVpl {
+            p: self.p,
+            n: self.n,
+            frame,
+            w_prev: frame.to_local(self.w_prev),
+            flux: self.flux,
+            shape: self.shape,
+            uv: self.uv,
+            medium: self.medium,
+        }
+    }
+}
+
 /// The virtual lights of one pass.
 #[derive(Clone, Debug, Default)]
 pub struct LightSet {
@@ -230,16 +247,9 @@ pub fn paths_for_vrl_count(
     Ok(((target as f64 / per_path).ceil() as u64).max(1))
 }
 
-fn trace_one(
-    scene: &Scene,
-    s: &mut Sampler,
-    inv_paths: f32,
-    settings: &LightTraceSettings,
-    out: &mut LightSet,
-) {
-    let Some(e) = scene.sample_emission(s.next_1d(), s.next_2d(), s.next_2d()) else { return };
-    let power = e.weight * inv_paths;
-    let mut medium = match e.n {
+/// The ray of an emission sample and the medium it starts in.
+pub(crate) fn emission_ray(scene: &Scene, e: &EmissionSample) -> (Ray, Option<MediumId>) {
+    let medium = match e.n {
         Some(n) => {
             // Area light: the medium on the emitting side, if its shape declares one.
             let shape = &scene.shapes[scene.emitters[e.emitter as usize].area_shape().unwrap_or(0) as usize];
@@ -251,7 +261,19 @@ fn trace_one(
         }
         None => scene.medium_at(e.p),
     };
-    let mut ray = Ray::new(e.n.map_or(e.p, |n| offset_origin(e.p, n, e.d)), e.d);
+    (Ray::new(e.n.map_or(e.p, |n| offset_origin(e.p, n, e.d)), e.d), medium)
+}
+
+fn trace_one(
+    scene: &Scene,
+    s: &mut Sampler,
+    inv_paths: f32,
+    settings: &LightTraceSettings,
+    out: &mut LightSet,
+) {
+    let Some(e) = scene.sample_emission(s.next_1d(), s.next_2d(), s.next_2d()) else { return };
+    let power = e.weight * inv_paths;
+    let (mut ray, mut medium) = emission_ray(scene, &e);
     let hero = hero_channel(s.next_1d());
     // Relative throughput (starts at 1) and pdf ratios; the flux is power * t.
     let mut t = Rgb::ONE;

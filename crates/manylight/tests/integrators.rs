@@ -112,6 +112,7 @@ fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
     ManyLightSettings {
         budget: LightBudget::Paths(paths),
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+        caustic_paths: None,
     }
 }
 
@@ -275,6 +276,62 @@ fn glass_ball_room_whole_image_matches_volpath() {
         r.failed_fraction() > 0.01 || mean_z.abs() > 5.0,
         "the missing light at gathering points went unnoticed"
     );
+}
+
+/// The caustic paths (`haze_manylight::splat`: light aimed at the glass and connected to the
+/// camera) against the camera continuation they replace (`caustic_paths = 0`), component
+/// `surface`, on a hazy room with a glass ball under a large lamp
+/// (`tests/data/caustic-room.xml`, 16 x 12 pixels), with the box filter and with Mitsuba's
+/// Gaussian (the splat's filter weights). Both strategies are unbiased for the caustics seen
+/// directly and everything else is shared: with the same seeds the two renders draw the same
+/// light and camera paths and differ only in how those caustics are estimated, so the paired
+/// per-pass difference of the image means isolates them (its z-score within 5), besides the
+/// per-pixel z-test. Negative control: splats 20% too bright fail the paired test.
+#[test]
+fn caustic_paths_match_the_camera_continuation() {
+    use haze_scene::camera::PixelFilter;
+    let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/caustic-room.xml"));
+    (scene.camera.width, scene.camera.height) = (16, 12);
+    let (paths, passes) = (20, 48);
+    let with = |scene: &Scene, caustic_paths: u64| ManyLightSettings {
+        caustic_paths: Some(caustic_paths),
+        ..settings(scene, paths)
+    };
+    // z-score of the mean of the per-pass differences of the `surface` image means.
+    let paired_z = |a: &Passes, b: &Passes| {
+        let d: Vec<f64> = a
+            .pass_means
+            .iter()
+            .zip(&b.pass_means)
+            .map(|(x, y)| {
+                let s = Component::Surface as usize;
+                (x[s].iter().sum::<f64>() - y[s].iter().sum::<f64>()) / 3.0
+            })
+            .collect();
+        let n = d.len() as f64;
+        let mean = d.iter().sum::<f64>() / n;
+        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+        mean / (var / n).sqrt()
+    };
+    let mut failures = Vec::new();
+    for filter in [PixelFilter::Box, PixelFilter::MITSUBA_DEFAULT] {
+        scene.camera.filter = filter;
+        let continuation =
+            render_passes(&scene, &VrlIntegrator::new(&scene, with(&scene, 0), 1).unwrap(), passes, 16, 1);
+        let mut splatting = VrlIntegrator::new(&scene, with(&scene, 2000), 1).unwrap();
+        let splats = render_passes(&scene, &splatting, passes, 16, 1);
+        let (r, _) = compare(&splats, &continuation, Component::Surface);
+        let z = paired_z(&splats, &continuation);
+        judge(&mut failures, &format!("{filter:?}: caustic paths vs continuation (paired z)"), &r, z, 0.01);
+        if filter == PixelFilter::Box {
+            splatting.caustic_scale = 1.2;
+            let wrong = render_passes(&scene, &splatting, passes, 16, 1);
+            let z = paired_z(&wrong, &continuation);
+            println!("caustic splats x 1.2: paired image-mean z = {z:.2}");
+            assert!(z.abs() > 5.0, "20% too bright caustic splats went unnoticed: paired z = {z:.2}");
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` against `volpath`, every component, on the peer scene

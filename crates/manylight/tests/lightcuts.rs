@@ -34,6 +34,7 @@ fn ml(scene: &Scene, paths: u64) -> ManyLightSettings {
     ManyLightSettings {
         budget: LightBudget::Paths(paths),
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
+        caustic_paths: None,
     }
 }
 

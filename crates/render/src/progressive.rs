@@ -12,7 +12,7 @@
 //! the per-pass cost of `spp_per_pass = 1`; the number of passes still depends only on `spp` and
 //! `spp_per_pass`, and cancellation and time budgets stop at a round's end (a pass boundary).
 
-use crate::components::PathRadiance;
+use crate::components::{Component, PathRadiance};
 use crate::film::Film;
 use crate::integrators::{Integrator, VolPath};
 use haze_core::Sampler;
@@ -160,6 +160,7 @@ pub fn render<I: Integrator>(
                         let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
                         let ray = rays.generate(pos);
                         let mut r = integrator.radiance(scene, data, ray, cam.medium, &mut sampler);
+                        r.add(Component::Surface, integrator.pixel_light(data, pixel));
                         if !r.total().is_finite() {
                             invalid.fetch_add(1, Ordering::Relaxed);
                             r = PathRadiance::default();

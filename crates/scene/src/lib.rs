@@ -17,6 +17,7 @@ pub mod medium;
 pub mod scene;
 pub mod shape;
 pub mod texture;
+pub mod vdb;
 pub mod volume;
 pub mod xml;
 

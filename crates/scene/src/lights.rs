@@ -213,6 +213,11 @@ impl Scene {
     /// uniformly in their cutoff cone (`weight = I falloff 2 pi (1 - cos_cutoff) N`), area lights
     /// from a uniform point with a cosine-weighted direction on the normal side
     /// (`weight = L pi A N`), `N` the number of emitters.
+    /// The uniform-area sampler of area emitter `emitter` (`None` for other kinds).
+    pub fn area_sampler(&self, emitter: u32) -> Option<&crate::shape::AreaSampler> {
+        self.emitter_tables.area.get(emitter as usize)?.as_ref()
+    }
+
     pub fn sample_emission(&self, u_select: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         use haze_core::sampling::{sample_cosine_hemisphere, sample_uniform_cone, uniform_cone_pdf};
         use haze_core::Frame;

@@ -38,6 +38,19 @@ pub enum LightBudget {
 pub struct ManyLightSettings {
     pub budget: LightBudget,
     pub trace: LightTraceSettings,
+    /// Caustic paths per pass (`crate::splat`): `None` for the default (one per pixel), `Some(0)`
+    /// to leave the caustics seen directly to the camera continuation.
+    pub caustic_paths: Option<u64>,
+}
+
+/// The caustic-path tracer of `settings` for `scene`, if the scene has caustics to trace.
+pub(crate) fn caustic_tracer(
+    scene: &Scene,
+    settings: &ManyLightSettings,
+) -> Option<crate::splat::CausticTracer> {
+    let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+    let paths = settings.caustic_paths.unwrap_or(pixels);
+    crate::splat::CausticTracer::new(scene, paths, settings.trace.max_events)
 }
 
 /// Resolves the light budget to a number of paths per pass, and checks that every emitter can
@@ -93,22 +106,7 @@ pub(crate) fn connect_surface(scene: &Scene, vpl: &crate::vpl::SurfaceVpl, x: gl
 
 /// The surface VPLs of a light set in the form the estimators take.
 pub(crate) fn surface_vpls(set: &LightSet) -> Vec<crate::vpl::SurfaceVpl> {
-    set.surface_vpls
-        .iter()
-        .map(|r| {
-            let frame = haze_core::Frame::from_normal(r.ns);
-            crate::vpl::SurfaceVpl {
-                p: r.p,
-                n: r.n,
-                frame,
-                w_prev: frame.to_local(r.w_prev),
-                flux: r.flux,
-                shape: r.shape,
-                uv: r.uv,
-                medium: r.medium,
-            }
-        })
-        .collect()
+    set.surface_vpls.iter().map(|r| r.to_surface_vpl()).collect()
 }
 
 /// Index offset of surface VPLs in `light_uniforms`, so that they draw numbers of their own.

@@ -3,12 +3,13 @@
 //! surface point of the camera path (`docs/theory.md` §2.1).
 
 use super::{
-    connect, light_uniforms, media, medium_vpl_to_point, paths_per_pass, split_groups, surface_vpls,
-    surface_vpls_to_point, surface_vpls_to_segment, ManyLightSettings, PassTracer,
+    caustic_tracer, connect, light_uniforms, media, medium_vpl_to_point, paths_per_pass, split_groups,
+    surface_vpls, surface_vpls_to_point, surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::VplRecord;
+use crate::splat::{CameraSplats, CausticTracer};
 use crate::vpl::SurfaceVpl;
 use crate::vpl::{sample_vpl_contribution, Vpl};
 use crate::vrl::VrlMedium;
@@ -25,6 +26,7 @@ pub struct VplIntegrator {
     /// `c` (biased).
     pub surface_clamp: Option<f32>,
     tracer: PassTracer,
+    caustics: Option<CausticTracer>,
 }
 
 /// The VPLs of one pass in the two groups of `gather::Gather::segment`.
@@ -34,6 +36,7 @@ pub struct VplPass {
     media: Vec<VrlMedium>,
     /// The scene has a heterogeneous medium: every light goes through `crate::hetero`.
     hetero: bool,
+    splats: CameraSplats,
 }
 
 impl VplIntegrator {
@@ -44,7 +47,8 @@ impl VplIntegrator {
         clamp: Option<f32>,
     ) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
-        Ok(VplIntegrator { settings, clamp, surface_clamp: None, tracer: PassTracer::new(paths) })
+        let caustics = caustic_tracer(scene, &settings);
+        Ok(VplIntegrator { settings, clamp, surface_clamp: None, tracer: PassTracer::new(paths), caustics })
     }
 }
 
@@ -60,12 +64,19 @@ impl Integrator for VplIntegrator {
             .tracer
             .trace(scene, seed, pass, &self.settings.trace, |s| s.vpls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
+        let splats =
+            self.caustics.as_ref().map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass));
         VplPass {
             groups,
             surface_vpls: surface_vpls(&set),
             media: media(scene),
             hetero: crate::hetero::any(scene),
+            splats,
         }
+    }
+
+    fn pixel_light(&self, pass: &VplPass, pixel: u64) -> Rgb {
+        pass.splats.get(pixel)
     }
 
     fn radiance(
@@ -131,6 +142,10 @@ impl Gather for VplGather<'_> {
             self.integrator.surface_clamp,
         );
         [sums[0], sums[1] + surface]
+    }
+
+    fn splats_caustics(&self) -> bool {
+        self.integrator.caustics.is_some()
     }
 
     fn point(&self, gp: &GatherPoint, _key: u64) -> Rgb {

@@ -3,12 +3,13 @@
 //! every gathering surface point of the camera path (`docs/theory.md` §2.1).
 
 use super::{
-    connect, light_uniforms, media, paths_per_pass, split_groups, surface_vpls, surface_vpls_to_point,
-    surface_vpls_to_segment, ManyLightSettings, PassTracer,
+    caustic_tracer, connect, light_uniforms, media, paths_per_pass, split_groups, surface_vpls,
+    surface_vpls_to_point, surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::VrlRecord;
+use crate::splat::{CameraSplats, CausticTracer};
 use crate::vpl::SurfaceVpl;
 use crate::vrl::estimator::{contributes, point_pair_estimate, sample_point_pair, PointPair};
 use crate::vrl::surface::sample_vrl_to_point;
@@ -28,6 +29,11 @@ pub struct VrlIntegrator {
     /// z-test (`crates/manylight/tests/integrators.rs`), which must fail when it is off.
     #[doc(hidden)]
     pub gather_point_scale: f32,
+    /// Scale of the caustic paths' splats (`crate::splat`): 1, except in the negative control
+    /// of the test that compares them with the camera continuation (1.2 must fail).
+    #[doc(hidden)]
+    pub caustic_scale: f32,
+    caustics: Option<CausticTracer>,
     tracer: PassTracer,
     /// Camera segment x VRL evaluations so far (for `haze bench`).
     evaluations: AtomicU64,
@@ -41,16 +47,20 @@ pub struct VrlPass {
     media: Vec<VrlMedium>,
     /// The scene has a heterogeneous medium: every light goes through `crate::hetero`.
     hetero: bool,
+    splats: CameraSplats,
 }
 
 impl VrlIntegrator {
     /// Fails if an emitter cannot start light paths (`constant`).
     pub fn new(scene: &Scene, settings: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
+        let caustics = caustic_tracer(scene, &settings);
         Ok(VrlIntegrator {
             settings,
             clamp: None,
             gather_point_scale: 1.0,
+            caustic_scale: 1.0,
+            caustics,
             tracer: PassTracer::new(paths),
             evaluations: AtomicU64::new(0),
         })
@@ -78,12 +88,21 @@ impl Integrator for VrlIntegrator {
             .tracer
             .trace(scene, seed, pass, &self.settings.trace, |s| s.vrls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
+        let splats = self
+            .caustics
+            .as_ref()
+            .map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass).scaled(self.caustic_scale));
         VrlPass {
             groups,
             surface_vpls: surface_vpls(&set),
             media: media(scene),
             hetero: crate::hetero::any(scene),
+            splats,
         }
+    }
+
+    fn pixel_light(&self, pass: &VrlPass, pixel: u64) -> Rgb {
+        pass.splats.get(pixel)
     }
 
     fn radiance(
@@ -135,6 +154,10 @@ impl Gather for VrlGather<'_> {
         let surface =
             surface_vpls_to_segment(scene, &pass.surface_vpls, cs, cam_medium, key, self.integrator.clamp);
         [sums[0], sums[1] + surface]
+    }
+
+    fn splats_caustics(&self) -> bool {
+        self.integrator.caustics.is_some()
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {

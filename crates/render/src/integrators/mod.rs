@@ -7,7 +7,7 @@ pub use nee::{surface_nee, transmittance_to, transmittance_to_sampled, SurfaceMi
 pub use volpath::VolPath;
 
 use crate::components::PathRadiance;
-use haze_core::{Ray, Sampler};
+use haze_core::{Ray, Rgb, Sampler};
 use haze_scene::{MediumId, Scene};
 
 /// An estimator of radiance along camera rays, run in progressive passes.
@@ -31,6 +31,14 @@ pub trait Integrator: Sync {
     /// A line of statistics for the user after rendering (e.g. how many lights were made).
     fn summary(&self) -> Option<String> {
         None
+    }
+
+    /// Light the pass itself brings to pixel `pixel` (`y * width + x`), in the `surface`
+    /// component: light tracing's connections to the camera (the many-light integrators'
+    /// caustics seen directly). The render loop adds it to every sample of the pixel in the
+    /// pass, so the pass's mean for the pixel gains it once.
+    fn pixel_light(&self, _pass: &Self::PassData, _pixel: u64) -> Rgb {
+        Rgb::ZERO
     }
 
     /// One sample of the radiance arriving at the camera along `-ray.d`, split by component.

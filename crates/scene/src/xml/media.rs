@@ -6,9 +6,11 @@ use super::params::Params;
 use super::LoadError;
 use crate::hetero::{Heterogeneous, MajorantGrid, MAJORANT_RES};
 use crate::medium::Medium;
+use crate::vdb::{read_vdb, VdbError};
 use crate::volume::{Filter, Grid, Volume, VolumeData, Wrap};
 use glam::{Affine3A, Mat4};
 use haze_core::{Phase, Rgb};
+use std::path::Path;
 use std::sync::Arc;
 
 /// Builds a `<medium>` named `name`.
@@ -161,7 +163,11 @@ fn check_range(c: Rgb, (lo, hi): (f32, f32)) -> Result<(), String> {
 /// - `gridvolume`: `filename` (a `.vol` file, required), `filter_type` (`trilinear`; or
 ///   `nearest`), `wrap_mode` (`clamp`; or `repeat`, `mirror`), `to_world` (identity),
 ///   `use_grid_bbox` (false: the grid spans the unit cube; true: the box in the file), `raw`
-///   (false; no effect in RGB rendering, as in Mitsuba's RGB variants).
+///   (false; no effect in RGB rendering, as in Mitsuba's RGB variants);
+/// - haze's extension: a `gridvolume` whose `filename` ends in `.vdb` reads the OpenVDB float
+///   grid named by `grid` (`density`), placed by the file's own transform then `to_world`;
+///   `filter_type` and `raw` apply, `wrap_mode` and `use_grid_bbox` are errors (see
+///   `crate::vdb`), and `grid` is an error on a `.vol` file.
 pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) -> Result<Volume, LoadError> {
     let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
     let to_world = affine(p, &to_world)?;
@@ -184,6 +190,14 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
             ))
         }
     };
+    let is_vdb = Path::new(filename).extension().is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
+    if is_vdb && p.raw("wrap_mode").is_some() {
+        return Err(p.error_at(
+            "wrap_mode",
+            "'wrap_mode' does not apply to a .vdb grid: outside its active voxels a .vdb grid is its background, 0 \
+             (docs/openvdb.md)",
+        ));
+    }
     let wrap = match p.string_opt("wrap_mode")?.unwrap_or("clamp") {
         "clamp" => Wrap::Clamp,
         "repeat" => Wrap::Repeat,
@@ -196,11 +210,27 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
         }
     };
     let use_grid_bbox = p.bool("use_grid_bbox", false)?;
+    if is_vdb && p.raw("use_grid_bbox").is_some() {
+        return Err(p.error_at(
+            "use_grid_bbox",
+            "'use_grid_bbox' does not apply to a .vdb grid: the file's own transform places it (docs/openvdb.md)",
+        ));
+    }
+    let grid_name = p.string_opt("grid")?;
+    if !is_vdb && grid_name.is_some() {
+        return Err(p.error_at(
+            "grid",
+            format!("'grid' applies only to OpenVDB (.vdb) files; '{filename}' is read as a .vol grid"),
+        ));
+    }
     p.bool("raw", false)?;
     p.finish()?;
     let path = doc.resolve(filename, p.element());
     if !path.exists() {
         return Err(p.error_at("filename", format!("volume file '{}' not found", path.display())));
+    }
+    if is_vdb {
+        return vdb_volume(p, &path, grid_name.unwrap_or("density"), what, range, filter, to_world);
     }
     let grid = read_vol(&path).map_err(|m| p.error_at("filename", format!("'{}': {m}", path.display())))?;
     if let Some((cell, c, v)) = grid.first_outside(range.0, range.1) {
@@ -231,6 +261,40 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
         to_world
     };
     Ok(Volume::new(VolumeData::Grid { grid: Arc::new(grid), filter, wrap }, to_world))
+}
+
+/// The float grid `grid_name` of the OpenVDB file `path` as a volume (`crate::vdb` has the
+/// mapping): the VDB's world, then the element's `to_world`.
+fn vdb_volume(
+    p: &Params,
+    path: &Path,
+    grid_name: &str,
+    what: &str,
+    range: (f32, f32),
+    filter: Filter,
+    to_world: Affine3A,
+) -> Result<Volume, LoadError> {
+    let shown = path.display();
+    // Errors about the grid point at `grid` if it is given, else at `filename`.
+    let at_grid = if p.raw("grid").is_some() { "grid" } else { "filename" };
+    let vdb = read_vdb(path, grid_name).map_err(|e| match e {
+        VdbError::Grid(m) => p.error_at(at_grid, format!("'{shown}': {m}")),
+        VdbError::File(m) => p.error_at("filename", format!("'{shown}': {m}")),
+    })?;
+    if let Some((cell, _, v)) = vdb.grid.first_outside(range.0, range.1) {
+        let [i, j, k] = vdb.voxel(cell);
+        return Err(p.error_at(
+            at_grid,
+            format!(
+                "'{shown}': grid '{grid_name}' holds {v} at voxel ({i}, {j}, {k}): '{what}' values must be finite \
+                 and lie in [{}, {}]",
+                range.0, range.1
+            ),
+        ));
+    }
+    let to_world = to_world * vdb.to_world;
+    // Clamp: the padding ring is background, so every wrap mode reads the same (crate::vdb).
+    Ok(Volume::new(VolumeData::Grid { grid: Arc::new(vdb.grid), filter, wrap: Wrap::Clamp }, to_world))
 }
 
 /// Largest `.vol` file haze reads (as for mesh files, `docs/robustness.md`).

@@ -73,7 +73,11 @@ const PLUGINS: &[PluginEntry] = &[
     ("texture", "checkerboard", &["color0", "color1", "to_uv"]),
     ("medium", "homogeneous", &["sigma_t", "albedo", "scale", "sample_emitters"]),
     ("medium", "heterogeneous", &["sigma_t", "albedo", "scale", "sample_emitters"]),
-    ("volume", "gridvolume", &["filename", "filter_type", "wrap_mode", "to_world", "use_grid_bbox", "raw"]),
+    (
+        "volume",
+        "gridvolume",
+        &["filename", "filter_type", "wrap_mode", "to_world", "use_grid_bbox", "raw", "grid"],
+    ),
     ("volume", "constvolume", &["value", "to_world"]),
     ("phase", "isotropic", &[]),
     ("phase", "hg", &["g"]),

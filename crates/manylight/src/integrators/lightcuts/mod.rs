@@ -17,12 +17,13 @@ mod surface;
 pub use kinds::{ClusterKind, Vpls, Vrls};
 
 use super::{
-    light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment, surface_vpls,
-    ManyLightSettings,
+    caustic_tracer, light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment,
+    surface_vpls, ManyLightSettings,
 };
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::trace_light_paths;
+use crate::splat::{CameraSplats, CausticTracer};
 use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
 use crate::tree::cone::{DirCone, LineCone};
@@ -113,6 +114,7 @@ pub struct LightcutsIntegrator<K: ClusterKind> {
     paths: u64,
     stats: Stats,
     kind: PhantomData<K>,
+    caustics: Option<CausticTracer>,
 }
 
 /// One tree of lights (medium-only or after a surface bounce).
@@ -140,6 +142,8 @@ pub struct LightcutPass<K: ClusterKind> {
     surface_tree: SampleTree,
     /// Mean extinction of the scene's media (the gathering points' importance).
     sigma_mean: f32,
+    /// Light tracing's connections of the caustic vertices to the camera.
+    splats: CameraSplats,
 }
 
 impl<K: ClusterKind> LightcutsIntegrator<K> {
@@ -150,7 +154,8 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         seed: u64,
     ) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &ml, seed)?;
-        Ok(LightcutsIntegrator { ml, settings, paths, stats: Stats::default(), kind: PhantomData })
+        let caustics = caustic_tracer(scene, &ml);
+        Ok(LightcutsIntegrator { ml, settings, paths, stats: Stats::default(), kind: PhantomData, caustics })
     }
 
     /// The light tree over `summaries` with the configured builder.
@@ -258,6 +263,8 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
         let [a, b] = K::lights(&set);
         let surface_vpls = surface_vpls(&set);
+        let splats =
+            self.caustics.as_ref().map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass));
         let n = a.len() + b.len() + surface_vpls.len();
         let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
         let surface_tree = {
@@ -297,7 +304,12 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
             surface_vpls,
             surface_tree,
             sigma_mean,
+            splats,
         }
+    }
+
+    fn pixel_light(&self, pass: &LightcutPass<K>, pixel: u64) -> Rgb {
+        pass.splats.get(pixel)
     }
 
     fn radiance(
@@ -521,6 +533,10 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
             )
         });
         [cuts[0], cuts[1] + surface]
+    }
+
+    fn splats_caustics(&self) -> bool {
+        self.integrator.caustics.is_some()
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {

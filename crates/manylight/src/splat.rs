@@ -1,0 +1,602 @@
+//! Caustics seen directly, by light tracing to the camera: dedicated *caustic paths* from the
+//! point, spot and area emitters aimed at the scene's delta surfaces (glass, thin sheets),
+//! followed through delta chains, and connected to the pinhole from every point where they
+//! can scatter towards it: each medium segment after the first direction-changing delta
+//! vertex (single scattering, one point per segment) and the first non-delta surface point.
+//! The splats go into the pixels around their image (`docs/theory.md` §2.1, row "caustics
+//! seen directly").
+//!
+//! Without it those paths (`emitter D+ x camera`, `x` a medium point or a surface point the
+//! camera sees directly) are found only by the camera path's continuation from `x` hitting the
+//! emitter through the delta chain, a small target behind a glass ball: on
+//! `scenes/glass-beam.xml` about 80% of the many-light methods' variance (the ceiling lamp's
+//! caustics in the haze and on the floor). Point and spot lights' caustics cannot be hit at all,
+//! so before this the spot's single-scattered beam behind the ball was missing.
+//!
+//! ## Aiming the paths (a projection map, Jensen 1996)
+//! Each delta shape gets a bounding sphere. A caustic path picks an emitter `k` with
+//! probability `P_k` (power towards the spheres, mixed with 10% uniform), a point `y` on it
+//! (area lights: uniform, `1/A`), and a direction `ω` from the cone mixture of the spheres seen
+//! from `y`: sphere `j` with probability `Ω_j / Σ Ω`, then uniform in its cone, so
+//! `p(ω) = n(ω) / Σ_j Ω_j` with `n(ω)` the number of cones holding `ω`. Every path whose first
+//! surface is a delta surface has `ω` in one of the cones, so the estimator is unbiased:
+//!
+//! ```text
+//!   beta_0 = L_e(y, ω) |cos_y| / (N P_k p(y) p(ω))      (point/spot: the intensity, no cos)
+//! ```
+//!
+//! The path is then followed deterministically through media (`beta *= T(len)`, Beer-Lambert,
+//! or a ratio-tracking estimate in a heterogeneous medium; no free-flight sampling: every
+//! segment is a beam) and by BSDF sampling through delta
+//! surfaces (adjoint: `eta^2` undone as in light tracing). It ends at its first non-delta
+//! surface, at the first surface if that is not a delta one, or when it leaves.
+//!
+//! ## The importance of a pixel (pinhole camera)
+//! Pixel `j`'s value is the filter-weighted mean of the radiance over the film,
+//! `I_j = Int w_j(p) L(p) dp` (film coordinates `p` in pixels, `w_j` the reconstruction filter
+//! around the pixel normalised over the film, `camera::PixelFilter`). On the image plane at
+//! distance 1 (area `A = 4 tan(fov_x/2) tan(fov_y/2)`) a pixel is `A / (W H)`, and
+//! `dA_plane = dω / cos^3 θ` (θ from the optical axis), so
+//!
+//! ```text
+//!   I_j = Int w_j(p(ω)) (W H / A) L(ω) / cos^3 θ dω .
+//! ```
+//!
+//! A light point `x` of intensity `I(ω_c)` towards the camera at distance `d` adds `I T / d^2`
+//! to `Int L dω` around its image point `p(x)`, hence the splat
+//!
+//! ```text
+//!   C_j = w_j(p(x)) (W H / A) I(ω_c) T(x, camera) / (d^2 cos^3 θ) ,
+//! ```
+//!
+//! with `I = beta f(ω_c, ω_prev) |cos ω_c|` at a surface point (the surface VPL's intensity) and,
+//! on a beam `x_v = o + v d` drawn equiangularly towards the camera (`p(v) = h / (Θ d^2)`,
+//! Kulla & Fajardo 2012), `I / p(v) = beta T(v) sigma_s f_p(d, ω_c) Θ d^2 / h`. The camera side
+//! of these paths, which the continuation no longer counts, is exactly what the connection
+//! sees: a direct view through media, null boundaries and thin sheets' straight transmission
+//! (`gather.rs`).
+
+use crate::vpl::SurfaceVpl;
+use glam::{Vec2, Vec3};
+use haze_core::ray::offset_origin;
+use haze_core::sampling::{sample_uniform_cone, sample_uniform_sphere};
+use haze_core::transmittance::transmittance;
+use haze_core::{Frame, Ray, Rgb, Sampler, PI};
+use haze_render::integrators::transmittance_to;
+use haze_scene::camera::PixelFilter;
+use haze_scene::lights::EmissionSample;
+use haze_scene::shape::Geometry;
+use haze_scene::{Emitter, MediumId, Scene};
+use rayon::prelude::*;
+
+/// One pass's light-tracing splats: per pixel (row-major, as the film), the light the pass's
+/// caustic paths bring to it.
+#[derive(Clone, Debug, Default)]
+pub struct CameraSplats {
+    pixels: Vec<Rgb>,
+}
+
+impl CameraSplats {
+    /// The splatted light of pixel `pixel` (`y * width + x`); zero for a pass without caustic
+    /// paths.
+    #[inline]
+    pub fn get(&self, pixel: u64) -> Rgb {
+        self.pixels.get(pixel as usize).copied().unwrap_or(Rgb::ZERO)
+    }
+
+    /// The splats times `s`.
+    pub fn scaled(mut self, s: f32) -> Self {
+        if s != 1.0 {
+            for c in &mut self.pixels {
+                *c *= s;
+            }
+        }
+        self
+    }
+
+    /// Number of pixels that received light (for tests and statistics).
+    pub fn lit_pixels(&self) -> usize {
+        self.pixels.iter().filter(|c| !c.is_black()).count()
+    }
+}
+
+/// A delta shape's bounding sphere.
+#[derive(Clone, Copy, Debug)]
+struct Target {
+    c: Vec3,
+    r: f32,
+}
+
+/// The caustic paths' sampler: the targets and the emitter probabilities, built once per scene.
+#[derive(Clone, Debug)]
+pub struct CausticTracer {
+    targets: Vec<Target>,
+    /// `(emitter index, P_k)` of the point, spot and area emitters, and their CDF.
+    emitters: Vec<(u32, f32)>,
+    cdf: Vec<f32>,
+    paths: u64,
+    max_events: u32,
+}
+
+/// Separates the caustic paths' random numbers from every other stream of the same seed.
+const CAUSTIC_STREAM: u64 = 0x5b1a_7c0f_fee0_0001;
+
+impl CausticTracer {
+    /// `paths` caustic paths per pass, at most `max_events` delta vertices each; `None` if the
+    /// scene has no delta surface or no point, spot or area emitter (then there are no such
+    /// caustics), or `paths` is 0.
+    pub fn new(scene: &Scene, paths: u64, max_events: u32) -> Option<Self> {
+        let targets: Vec<Target> = scene
+            .shapes
+            .iter()
+            .filter(|s| s.bsdf.is_specular() && !s.bsdf.is_null())
+            .filter_map(|s| bounding_sphere(&s.geometry))
+            .collect();
+        if targets.is_empty() || paths == 0 {
+            return None;
+        }
+        let mut weights: Vec<(u32, f32)> = scene
+            .emitters
+            .iter()
+            .enumerate()
+            .filter_map(|(k, e)| emitter_weight(scene, e, &targets).map(|w| (k as u32, w)))
+            .collect();
+        if weights.is_empty() {
+            return None;
+        }
+        let total: f32 = weights.iter().map(|w| w.1).sum();
+        let n = weights.len() as f32;
+        for w in &mut weights {
+            w.1 = if total > 0.0 { 0.9 * w.1 / total + 0.1 / n } else { 1.0 / n };
+        }
+        let mut acc = 0.0;
+        let cdf = weights
+            .iter()
+            .map(|w| {
+                acc += w.1;
+                acc
+            })
+            .collect();
+        Some(CausticTracer { targets, emitters: weights, cdf, paths, max_events: max_events.max(1) })
+    }
+
+    /// Caustic paths per pass.
+    pub fn paths(&self) -> u64 {
+        self.paths
+    }
+
+    /// The splats of one pass's caustic paths (path `i` draws from
+    /// `Sampler::new(seed ^ CAUSTIC_STREAM, i, pass)`). Deterministic: chunks of paths run in
+    /// parallel, the sums in path order.
+    pub fn splats(&self, scene: &Scene, seed: u64, pass: u32) -> CameraSplats {
+        const CHUNK: u64 = 1024;
+        let view = View::new(scene);
+        let inv = 1.0 / self.paths as f32;
+        let chunks: Vec<Vec<(f32, f32, Rgb)>> = (0..self.paths.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut hits = Vec::new();
+                for i in c * CHUNK..((c + 1) * CHUNK).min(self.paths) {
+                    let mut s = Sampler::new(seed ^ CAUSTIC_STREAM, i, pass as u64);
+                    self.trace(scene, &view, &mut s, inv, &mut hits);
+                }
+                hits
+            })
+            .collect();
+        accumulate(scene, chunks.into_iter().flatten())
+    }
+
+    /// The emission sample of a caustic path (see the module docs), or `None`.
+    fn sample_emission(&self, scene: &Scene, s: &mut Sampler) -> Option<EmissionSample> {
+        let u = s.next_1d() * self.cdf.last().copied().unwrap_or(1.0);
+        let i = self.cdf.partition_point(|&c| c < u).min(self.emitters.len() - 1);
+        let (k, p_k) = self.emitters[i];
+        let (u_pos, u_pick, u_dir) = (s.next_2d(), s.next_1d(), s.next_2d());
+        let (p, n, p_pos) = match &scene.emitters[k as usize] {
+            Emitter::Point { position, .. } => (*position, None, 1.0),
+            Emitter::Spot { to_world, .. } => (to_world.transform_point3(Vec3::ZERO), None, 1.0),
+            Emitter::Area { shape, .. } => {
+                let table = scene.area_sampler(k)?;
+                let ss = table.sample(&scene.shapes[*shape as usize], u_pos);
+                (ss.p, Some(ss.n), ss.pdf)
+            }
+            _ => return None,
+        };
+        let (d, pdf_dir) = self.sample_direction(p, u_pick, u_dir)?;
+        let le = match &scene.emitters[k as usize] {
+            Emitter::Point { intensity, .. } => *intensity,
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => {
+                let local = to_world.inverse().transform_vector3(d).normalize();
+                *intensity * Emitter::spot_falloff(*cutoff_angle, *beam_width, local)
+            }
+            Emitter::Area { shape, .. } => {
+                let nn = n?;
+                let cos = nn.dot(d);
+                if cos <= 0.0 {
+                    return None;
+                }
+                scene.area_radiance(*shape, nn, d).map(|(_, le)| le)? * cos
+            }
+            _ => return None,
+        };
+        if le.is_black() {
+            return None;
+        }
+        Some(EmissionSample { p, d, n, weight: le / (p_k * p_pos * pdf_dir), emitter: k })
+    }
+
+    /// A direction from `p` by the cone mixture, with its pdf `n(ω) / Σ Ω_j`.
+    fn sample_direction(&self, p: Vec3, u_pick: f32, u: Vec2) -> Option<(Vec3, f32)> {
+        // Cones as (axis, cos_max, solid angle); a point inside a sphere sees all directions.
+        let cone = |t: &Target| {
+            let v = t.c - p;
+            let d2 = v.length_squared();
+            if d2 <= t.r * t.r * 1.0001 {
+                return (Vec3::Z, -1.0f32, 4.0 * PI);
+            }
+            let cos_max = (1.0 - t.r * t.r / d2).max(0.0).sqrt();
+            (v / d2.sqrt(), cos_max, 2.0 * PI * (1.0 - cos_max))
+        };
+        let total: f32 = self.targets.iter().map(|t| cone(t).2).sum();
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let mut pick = u_pick * total;
+        let mut chosen = cone(&self.targets[self.targets.len() - 1]);
+        for t in &self.targets {
+            let c = cone(t);
+            if pick < c.2 {
+                chosen = c;
+                break;
+            }
+            pick -= c.2;
+        }
+        let (axis, cos_max, _) = chosen;
+        let d = if cos_max <= -1.0 {
+            sample_uniform_sphere(u)
+        } else {
+            Frame::from_normal(axis).to_world(sample_uniform_cone(u, cos_max))
+        };
+        let holding = self
+            .targets
+            .iter()
+            .filter(|t| {
+                let (axis, cos_max, _) = cone(t);
+                cos_max <= -1.0 || d.dot(axis) >= cos_max
+            })
+            .count()
+            .max(1);
+        Some((d, holding as f32 / total))
+    }
+
+    /// Follows one caustic path and pushes its splats.
+    fn trace(
+        &self,
+        scene: &Scene,
+        view: &View,
+        s: &mut Sampler,
+        inv_paths: f32,
+        out: &mut Vec<(f32, f32, Rgb)>,
+    ) {
+        let Some(e) = self.sample_emission(scene, s) else { return };
+        let (mut ray, mut medium) = crate::lighttrace::emission_ray(scene, &e);
+        let mut beta = e.weight * inv_paths;
+        let mut through_delta = false;
+        let max_len = {
+            let (lo, hi) = scene.bounds();
+            let d = (hi - lo).length();
+            if d.is_finite() && d > 0.0 {
+                4.0 * d
+            } else {
+                4.0
+            }
+        };
+        let mut events = 0;
+        for _ in 0..10_000 {
+            let hit = scene.intersect(&ray);
+            if let Some(m) = medium {
+                let med = scene.medium(m);
+                let len = hit.map_or(max_len, |h| h.t).min(max_len);
+                if through_delta && len > 0.0 {
+                    let u = s.next_1d();
+                    if let Some(splat) = view.connect_beam(scene, ray.o, ray.d, len, m, beta, u, s) {
+                        out.push(splat);
+                    }
+                }
+                // A heterogeneous medium's beam by ratio tracking (docs/theory.md §12.4, §12.5).
+                match med.hetero.as_deref() {
+                    None => beta *= transmittance(med.sigma_t, len),
+                    Some(h) => beta *= h.transmittance(ray.o, ray.d, 0.0, len, s),
+                }
+            }
+            let Some(h) = hit else { return };
+            let shape = &scene.shapes[h.shape as usize];
+            if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
+                continue;
+            }
+            if shape.bsdf.is_black() || beta.is_black() {
+                return;
+            }
+            if !shape.bsdf.is_specular() {
+                if through_delta {
+                    let frame = Frame::from_normal(h.ns);
+                    let vpl = SurfaceVpl {
+                        p: h.p,
+                        n: h.n,
+                        frame,
+                        w_prev: frame.to_local(-ray.d),
+                        flux: beta,
+                        shape: h.shape,
+                        uv: h.uv,
+                        medium,
+                    };
+                    if let Some(splat) = view.connect_surface(scene, &vpl) {
+                        out.push(splat);
+                    }
+                }
+                return;
+            }
+            events += 1;
+            if events > self.max_events {
+                return;
+            }
+            let frame = Frame::from_normal(h.ns);
+            let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
+                return;
+            };
+            through_delta |= !bs.null;
+            // Adjoint transport, as in light tracing: the radiance-only 1/eta^2 is undone.
+            beta *= bs.weight * (bs.eta * bs.eta);
+            let d = frame.to_world(bs.wo);
+            medium = shape.medium_towards(d, h.n, medium);
+            ray = Ray::new(offset_origin(h.p, h.n, d), d);
+        }
+    }
+}
+
+/// A bounding sphere of a shape's geometry.
+fn bounding_sphere(g: &Geometry) -> Option<Target> {
+    match g {
+        Geometry::Sphere { center, radius, .. } => Some(Target { c: *center, r: *radius }),
+        Geometry::Disk { to_world, .. } => {
+            let ex = to_world.transform_vector3(Vec3::X).length();
+            let ey = to_world.transform_vector3(Vec3::Y).length();
+            Some(Target { c: to_world.transform_point3(Vec3::ZERO), r: ex.max(ey) * 1.001 })
+        }
+        Geometry::Mesh(m) => {
+            let (lo, hi) = m
+                .positions
+                .iter()
+                .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), p| {
+                    (lo.min(*p), hi.max(*p))
+                });
+            if !lo.is_finite() || !hi.is_finite() {
+                return None;
+            }
+            let c = 0.5 * (lo + hi);
+            let r = m.positions.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
+            Some(Target { c, r: r * 1.001 + 1e-5 })
+        }
+    }
+}
+
+/// A rough measure of the power emitter `e` sends towards the targets (for `P_k`), or `None`
+/// if it cannot start a caustic path (environments).
+fn emitter_weight(scene: &Scene, e: &Emitter, targets: &[Target]) -> Option<f32> {
+    let omega = |p: Vec3| -> f32 {
+        targets
+            .iter()
+            .map(|t| {
+                let d2 = (t.c - p).length_squared();
+                if d2 <= t.r * t.r {
+                    4.0 * PI
+                } else {
+                    2.0 * PI * (1.0 - (1.0 - t.r * t.r / d2).max(0.0).sqrt())
+                }
+            })
+            .sum()
+    };
+    match e {
+        Emitter::Point { position, intensity } => Some(intensity.mean() * omega(*position)),
+        Emitter::Spot { to_world, intensity, .. } => {
+            Some(intensity.mean() * omega(to_world.transform_point3(Vec3::ZERO)))
+        }
+        Emitter::Area { shape, radiance } => {
+            let sh = &scene.shapes[*shape as usize];
+            let area = haze_scene::shape::AreaSampler::new(sh).area;
+            let c = bounding_sphere(&sh.geometry).map_or(Vec3::ZERO, |t| t.c);
+            Some(radiance.mean() * area * omega(c) / PI)
+        }
+        _ => None,
+    }
+}
+
+/// Sums splats into the film's pixels with the reconstruction filter.
+fn accumulate(scene: &Scene, hits: impl Iterator<Item = (f32, f32, Rgb)>) -> CameraSplats {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let mut hits = hits.peekable();
+    if hits.peek().is_none() {
+        return CameraSplats::default();
+    }
+    let mut pixels = vec![Rgb::ZERO; w * h];
+    if cam.filter == PixelFilter::Box {
+        for (px, py, c) in hits {
+            let (x, y) = ((px as usize).min(w - 1), (py as usize).min(h - 1));
+            pixels[y * w + x] += c;
+        }
+        return CameraSplats { pixels };
+    }
+    let (zx, zy) = (filter_norms(cam.filter, w), filter_norms(cam.filter, h));
+    let r = cam.filter.radius();
+    for (px, py, c) in hits {
+        let x0 = ((px - r - 0.5).floor().max(0.0)) as usize;
+        let x1 = ((px + r - 0.5).ceil() as usize).min(w - 1);
+        let y0 = ((py - r - 0.5).floor().max(0.0)) as usize;
+        let y1 = ((py + r - 0.5).ceil() as usize).min(h - 1);
+        for y in y0..=y1 {
+            let fy = cam.filter.eval(py - (y as f32 + 0.5)) / zy[y];
+            if fy == 0.0 {
+                continue;
+            }
+            for x in x0..=x1 {
+                let fx = cam.filter.eval(px - (x as f32 + 0.5)) / zx[x];
+                pixels[y * w + x] += c * (fx * fy);
+            }
+        }
+    }
+    CameraSplats { pixels }
+}
+
+/// `Z_i = Int_0^n f(x - (i + 1/2)) dx` for every pixel `i` of an axis of `n` pixels: the
+/// normalisation of the filter restricted to the film (`PixelFilter` samples the same
+/// restricted profile). Simpson's rule on each side of the peak (32 intervals a side: exact for
+/// the tent, better than 1e-6 relative for the Gaussian).
+fn filter_norms(filter: PixelFilter, n: usize) -> Vec<f32> {
+    let r = filter.radius() as f64;
+    let simpson = |a: f64, b: f64, c: f64| {
+        if b <= a {
+            return 0.0;
+        }
+        const K: usize = 32;
+        let hh = (b - a) / K as f64;
+        let f = |x: f64| filter.eval((x - c) as f32) as f64;
+        let mut s = f(a) + f(b);
+        for i in 1..K {
+            s += f(a + i as f64 * hh) * if i % 2 == 1 { 4.0 } else { 2.0 };
+        }
+        s * hh / 3.0
+    };
+    (0..n)
+        .map(|i| {
+            let c = i as f64 + 0.5;
+            let (lo, hi) = ((c - r).max(0.0), (c + r).min(n as f64));
+            (simpson(lo, c, c) + simpson(c, hi, c)) as f32
+        })
+        .collect()
+}
+
+/// Where a point lands on the film.
+struct Projection {
+    px: f32,
+    py: f32,
+    /// `(W H / A) / cos^3 θ` (cos θ from camera space, so any scale of `to_world` drops out).
+    density: f32,
+    /// The fraction of the way from the camera to the point where camera rays start (the
+    /// near clip plane).
+    near: f32,
+}
+
+/// The pinhole's constants.
+struct View {
+    o: Vec3,
+    to_camera: glam::Mat4,
+    tan_x: f32,
+    tan_y: f32,
+    /// `W H / A`: pixels per unit area of the image plane at distance 1.
+    pixel_density: f32,
+}
+
+impl View {
+    fn new(scene: &Scene) -> Self {
+        let cam = &scene.camera;
+        let tan_x = (0.5 * cam.fov_x_deg.to_radians()).tan();
+        let tan_y = tan_x * cam.height as f32 / cam.width as f32;
+        View {
+            o: cam.position(),
+            to_camera: cam.to_world.inverse(),
+            tan_x,
+            tan_y,
+            pixel_density: (cam.width * cam.height) as f32 / (4.0 * tan_x * tan_y),
+        }
+    }
+
+    /// The film position of `p` and `(W H / A) / cos^3 θ`, or `None` outside the film and the
+    /// clip planes; with `q.z / |q|`-based cos θ, `near / q.z` the fraction of the way from the
+    /// camera where its rays start.
+    fn project(&self, cam: &haze_scene::camera::Camera, p: Vec3) -> Option<Projection> {
+        let q = self.to_camera.transform_point3(p);
+        if !(q.z >= cam.near_clip && q.z <= cam.far_clip) {
+            return None;
+        }
+        let (sx, sy) = (q.x / (q.z * self.tan_x), q.y / (q.z * self.tan_y));
+        let px = (1.0 - sx) * 0.5 * cam.width as f32;
+        let py = (1.0 - sy) * 0.5 * cam.height as f32;
+        if !(px >= 0.0 && px < cam.width as f32 && py >= 0.0 && py < cam.height as f32) {
+            return None;
+        }
+        let cos = q.z / q.length();
+        Some(Projection {
+            px,
+            py,
+            density: self.pixel_density / (cos * cos * cos),
+            near: cam.near_clip / q.z,
+        })
+    }
+
+    /// A beam's single scattering towards the camera: the beam `o + v d`, `v` in `[0, len]`, in
+    /// homogeneous medium `m` with `beta` at `o`; one point drawn equiangularly towards the
+    /// camera with `u` (module docs).
+    #[allow(clippy::too_many_arguments)]
+    fn connect_beam(
+        &self,
+        scene: &Scene,
+        o: Vec3,
+        d: Vec3,
+        len: f32,
+        m: MediumId,
+        beta: Rgb,
+        u: f32,
+        s: &mut Sampler,
+    ) -> Option<(f32, f32, Rgb)> {
+        let med = scene.medium(m);
+        let sigma_s = med.sigma_s();
+        if sigma_s.is_black() {
+            return None;
+        }
+        let seg = crate::vrl::Segment::new(o, d, len);
+        let (v, theta_over_h) = crate::vpl::estimator::sample_distance_towards(&seg, self.o, u, None)?;
+        let x = seg.at(v);
+        let pr = self.project(&scene.camera, x)?;
+        let to_cam = self.o - x;
+        let dist = to_cam.length();
+        if dist <= 0.0 {
+            return None;
+        }
+        let wc = to_cam / dist;
+        let f = med.phase.eval(d, wc);
+        let tr = transmittance_to(scene, x, None, wc, dist * (1.0 - pr.near), Some(m));
+        if tr.is_black() {
+            return None;
+        }
+        // `T(v) sigma_s`: exact in a homogeneous medium; in a heterogeneous one `sigma_s(x)` and a
+        // ratio-tracking estimate of `T(v)` (docs/theory.md §12.5, (T31)).
+        let c = match med.hetero.as_deref() {
+            None => beta * transmittance(med.sigma_t, v) * sigma_s * tr * (f * theta_over_h * pr.density),
+            Some(h) => beta * crate::hetero::along(h, &seg, x, s) * tr * (f * theta_over_h * pr.density),
+        };
+        Some((pr.px, pr.py, c))
+    }
+
+    /// A surface point's splat: `vpl`'s intensity towards the camera (module docs).
+    fn connect_surface(&self, scene: &Scene, vpl: &SurfaceVpl) -> Option<(f32, f32, Rgb)> {
+        let pr = self.project(&scene.camera, vpl.p)?;
+        let v = self.o - vpl.p;
+        let d = v.length();
+        if d <= 0.0 {
+            return None;
+        }
+        let wc = v / d;
+        let shape = &scene.shapes[vpl.shape as usize];
+        let intensity = vpl.intensity(&shape.bsdf, wc);
+        if intensity.is_black() {
+            return None;
+        }
+        let medium = shape.medium_towards(wc, vpl.n, vpl.medium);
+        let tr = transmittance_to(scene, vpl.p, Some(vpl.n), wc, d * (1.0 - pr.near), medium);
+        if tr.is_black() {
+            return None;
+        }
+        Some((pr.px, pr.py, intensity * tr * (pr.density / (d * d))))
+    }
+}
