@@ -24,7 +24,6 @@
 //! camera segment or light evaluation on [`any`]), so their images are bit for bit as before.
 
 use crate::camera::CameraSegment;
-use crate::gather::GatherPoint;
 use crate::vpl::{SurfaceVpl, Vpl};
 use crate::vrl::estimator::{connection_direction, contributes, point_pair_estimate, PointPair};
 use crate::vrl::sampling::{Equiangular, VrlPointSampler};
@@ -216,23 +215,30 @@ pub(crate) fn vrl_to_segment(
     })
 }
 
-/// VRL -> gathering surface point (T12b with the VRL side of T33): `v` towards `x` by
-/// [`towards`] on the VRL.
-pub(crate) fn vrl_to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
+/// VRL -> gathering surface point `x` (T12b with the VRL side of T33; `receiver(d)` the point's
+/// `f(wi, d) |cos d|`, as `GatherPoint::reflectance`): `v` towards `x` by [`towards`] on the VRL.
+pub(crate) fn vrl_to_point(
+    scene: &Scene,
+    x: Vec3,
+    receiver: impl Fn(Vec3) -> Rgb,
+    media: &[VrlMedium],
+    vrl: &Vrl,
+    u: f32,
+) -> Rgb {
     let (vrl_m, vrl_h) = view(scene, &media[vrl.medium as usize], vrl.medium);
     let seg = &vrl.seg;
     if !(seg.len > 0.0 && seg.len.is_finite()) || (vrl.flux * vrl_m.sigma_s).is_black() {
         return Rgb::ZERO;
     }
     let maj = majorant_distance(vrl_h, seg);
-    let Some((v, g)) = towards(seg, maj.as_ref(), gp.p, u, None) else { return Rgb::ZERO };
+    let Some((v, g)) = towards(seg, maj.as_ref(), x, u, None) else { return Rgb::ZERO };
     let y = seg.at(v);
-    let n = connection_direction(gp.p - y, seg.d, seg.d.any_orthonormal_vector());
-    let f = gp.reflectance(-n);
+    let n = connection_direction(x - y, seg.d, seg.d.any_orthonormal_vector());
+    let f = receiver(-n);
     if f.is_black() {
         return Rgb::ZERO;
     }
-    let mut s = tracker(Vec2::new(u, 0.5), seg.o + gp.p);
+    let mut s = tracker(Vec2::new(u, 0.5), seg.o + x);
     let light = match vrl_h {
         Some(h) => along(h, seg, y, &mut s),
         None => vrl_m.sigma_s,
@@ -243,7 +249,7 @@ pub(crate) fn vrl_to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium],
     vrl.flux_at(vrl_m.sigma_t, v)
         * light
         * f
-        * connect(scene, vrl.medium, y, gp.p, &mut s)
+        * connect(scene, vrl.medium, y, x, &mut s)
         * vrl_m.phase.eval(seg.d, n)
         * g
 }

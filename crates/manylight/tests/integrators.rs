@@ -510,3 +510,61 @@ fn smoke_room_heterogeneous_matches_volpath() {
 fn smoke_puff_heterogeneous_matches_volpath() {
     check_smoke(false);
 }
+
+/// The caustic paths in a heterogeneous medium (their beams and splatted points with
+/// ratio-tracked transmittances and `sigma_s(x)`, `docs/theory.md` §12.5) against the camera
+/// continuation through the same smoke (ratio tracking along the camera walk), by the paired
+/// test of [`caustic_paths_match_the_camera_continuation`] on `tests/data/caustic-room.xml`
+/// with its haze replaced by a lumpy smoke grid over the room (box filter). Negative control:
+/// splats 20% too bright fail the paired test.
+#[test]
+fn caustic_paths_match_the_camera_continuation_in_smoke() {
+    let dir = std::env::temp_dir().join(format!("haze-manylight-caustic-smoke-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("smoke.vol"), smoke_grid(false).to_vol_bytes()).unwrap();
+    let path = haze_testkit::data::repo_root().join("tests/data/caustic-room.xml");
+    let xml = std::fs::read_to_string(&path).unwrap();
+    let (a, b) = (xml.find("<medium").unwrap(), xml.find("</medium>").unwrap() + "</medium>".len());
+    // The room is [-1.5, 1.5] x [0, 2.4] x [-1.5, 1.5]; the grid fills it.
+    let smoke = r#"<medium type="heterogeneous" id="haze"><float name="scale" value="0.6"/>
+        <volume name="sigma_t" type="gridvolume"><string name="filename" value="smoke.vol"/>
+          <transform name="to_world"><scale x="3" y="2.4" z="3"/><translate x="-1.5" z="-1.5"/></transform></volume>
+        <rgb name="albedo" value="0.9, 0.9, 0.9"/><phase type="hg"><float name="g" value="0.2"/></phase></medium>"#;
+    let xml = format!("{}{smoke}{}", &xml[..a], &xml[b..]);
+    let mut scene = haze_scene::load_str(&xml, &dir.join("caustic-smoke.xml"), &dir, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(!scene.media[0].is_homogeneous());
+    (scene.camera.width, scene.camera.height) = (16, 12);
+    let (paths, passes) = (20, 32);
+    let with = |caustic_paths: u64| ManyLightSettings {
+        caustic_paths: Some(caustic_paths),
+        ..settings(&scene, paths)
+    };
+    let paired_z = |a: &Passes, b: &Passes| {
+        let s = Component::Surface as usize;
+        let d: Vec<f64> = a
+            .pass_means
+            .iter()
+            .zip(&b.pass_means)
+            .map(|(x, y)| (x[s].iter().sum::<f64>() - y[s].iter().sum::<f64>()) / 3.0)
+            .collect();
+        let n = d.len() as f64;
+        let mean = d.iter().sum::<f64>() / n;
+        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+        mean / (var / n).sqrt()
+    };
+    let continuation = render_passes(&scene, &VrlIntegrator::new(&scene, with(0), 1).unwrap(), passes, 16, 1);
+    let mut splatting = VrlIntegrator::new(&scene, with(2000), 1).unwrap();
+    let splats = render_passes(&scene, &splatting, passes, 16, 1);
+    let (r, _) = compare(&splats, &continuation, Component::Surface);
+    let z = paired_z(&splats, &continuation);
+    let mut failures = Vec::new();
+    judge(&mut failures, "smoke: caustic paths vs continuation (paired z)", &r, z, 0.01);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    splatting.caustic_scale = 1.2;
+    let wrong = render_passes(&scene, &splatting, passes, 16, 1);
+    let z = paired_z(&wrong, &continuation);
+    println!("smoke: caustic splats x 1.2: paired image-mean z = {z:.2}");
+    assert!(z.abs() > 5.0, "20% too bright caustic splats in smoke went unnoticed: paired z = {z:.2}");
+}

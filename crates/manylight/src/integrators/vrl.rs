@@ -167,7 +167,7 @@ impl Gather for VrlGather<'_> {
         if pass.hetero {
             for (i, vrl) in lights {
                 let u = light_uniforms(key, i as u32).x;
-                sum += crate::hetero::vrl_to_point(scene, gp, &pass.media, vrl, u);
+                sum += crate::hetero::vrl_to_point(scene, gp.p, |d| gp.reflectance(d), &pass.media, vrl, u);
             }
         } else {
             for (i, vrl) in lights {

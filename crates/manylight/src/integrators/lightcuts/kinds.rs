@@ -104,7 +104,7 @@ impl ClusterKind for Vrls {
     }
     fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
         if crate::hetero::any(scene) {
-            return crate::hetero::vrl_to_point(scene, gp, media, vrl, u);
+            return crate::hetero::vrl_to_point(scene, gp.p, |d| gp.reflectance(d), media, vrl, u);
         }
         sample_vrl_to_point(
             gp.p,
