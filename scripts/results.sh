@@ -12,6 +12,9 @@
 #     REF_METHOD references (volpath cannot find the spot's caustic through the ball, so it cannot
 #     be the reference there), with volpath's error split into bias and noise
 #     (scripts/bias-noise.py, with $PYTHON if it has numpy and OpenEXR);
+#   - the heterogeneous smoke plume (PLUME_*): scenes/smoke-plume.xml at PLUME_RES, every method
+#     against a volpath reference (volpath is the method to beat in heterogeneous media, and its
+#     reference has no many-light method's correlated noise);
 # scripts/aggregate-results.py turns the runs of one scene into one table: median RMSE over the
 # seeds with its min-max, and RMSE ratios computed per seed (same run, same machine load).
 # Methods: volpath; brute-force vrl at two light counts; the paper's deterministic cut
@@ -28,7 +31,7 @@
 #   REF_TIME=5 WIDE_REF_TIME=5 BUDGET=1 WIDE_BUDGET=1 SEEDS=0 scripts/results.sh   # a smoke test
 # With REUSE_REF=1 an existing $OUT/<scene>/reference.exr is kept (e.g. rendered earlier with
 # `nice`: a reference's quality does not depend on the load, an equal-time comparison's does).
-# PARTS selects parts: "bench validation wide" (default all three).
+# PARTS selects parts: "bench validation wide whole plume" (default all five).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REF_TIME=${REF_TIME:-240}
@@ -40,15 +43,19 @@ SEEDS=${SEEDS:-"0 1 2"}
 REF_METHOD=${REF_METHOD:-vrl_lightcuts}
 OUT=${OUT:-target/results}
 SCENES=${SCENES:-"smoke-room spot-beam fog-shadow"}
-PARTS=${PARTS:-"bench validation wide whole"}
+PARTS=${PARTS:-"bench validation wide whole plume"}
 WHOLE_REF_TIME=${WHOLE_REF_TIME:-300}
 WHOLE_BUDGET=${WHOLE_BUDGET:-20}
+PLUME_REF_TIME=${PLUME_REF_TIME:-240}
+PLUME_BUDGET=${PLUME_BUDGET:-10}
+PLUME_RES=${PLUME_RES:-"64 80"}
 # Two groups per run, separated by "--": one sample per pass, then each method's auto samples per
 # pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
   vrl_lightcuts:1000 vrl_lightcuts:1000,light_samples=4 vrl_lightcuts:10000 vpl_lightcuts:10000)
 WIDE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000)
 WHOLE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vpl_lightcuts:10000)
+PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000)
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
 DOC=${DOC:-docs/results.md}
@@ -174,7 +181,23 @@ for part in $PARTS; do
         fi
       done
       ;;
-    *) echo "unknown part '$part' (bench, validation, wide, whole)" >&2; exit 1 ;;
+    plume)
+      read -r pw ph <<< "$PLUME_RES"
+      defines="-D res=$pw -D res_y=$ph"
+      ref=$OUT/plume/reference.exr
+      if [ "${REUSE_REF:-0}" = 1 ] && [ -f "$ref" ]; then
+        echo "reusing $ref" >&2
+      else
+        mkdir -p "$(dirname "$ref")"
+        # shellcheck disable=SC2086
+        "$HAZE" reference scenes/smoke-plume.xml $defines --time "$PLUME_REF_TIME" --seed 1000003 -o "$ref" >&2
+      fi
+      start_load=$(load)
+      table=$(compare plume/smoke-plume scenes/smoke-plume.xml "$ref" "$PLUME_BUDGET" "$defines" "${PLUME_METHODS[@]}")
+      printf '\n## smoke-plume (heterogeneous), %sx%s, %s s per method\n\n`scenes/smoke-plume.xml`, volpath reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
+        "$pw" "$ph" "$PLUME_BUDGET" "$PLUME_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      ;;
+    *) echo "unknown part '$part' (bench, validation, wide, whole, plume)" >&2; exit 1 ;;
   esac
 done
 

@@ -318,9 +318,12 @@ def trace_lights(scene: Scene, n: int, seed: int = 0, pass_index: int = 0) -> Li
     unit ``direction``, ``length``, ``flux`` (watts: the throughput at ``start``, already
     divided by ``n``; for chromatic media the flux at distance v is
     ``flux * T(v) / mean(ratio * T(v))``), the spectral-MIS pdf ``ratio``, the ``medium``
-    index, and ``after_surface``; and the virtual point lights as :data:`VPL_DTYPE`. The
-    first segment of each path starts at an emitter, so over the segments that start at
-    the emitters the fluxes sum to the emitted power.
+    index, and ``after_surface``; and the virtual point lights as :data:`VPL_DTYPE`. In a
+    homogeneous medium the first segment of each path starts at an emitter, so over the
+    segments that start at the emitters the fluxes sum to the emitted power. In a
+    heterogeneous medium a VRL spans its whole segment where the medium is (it may start
+    past the emitter), ``ratio`` is 0 and the flux at distance v is ``flux * T(v)`` with the
+    medium's transmittance (docs/theory.md §12.5).
     """
     d = _haze.trace_lights(scene._inner, n, seed, pass_index)
     vrls = np.zeros(len(d["vrl_length"]), dtype=VRL_DTYPE)

@@ -460,8 +460,7 @@ pub const OPTIONS: &[OptionSpec] = &[
         help: "Caustic paths per pass: light paths aimed at the glass (delta) surfaces and \
                connected to the camera, which render the caustics the camera sees directly \
                (light through glass into the haze or onto a wall); 0 leaves them to the camera \
-               path, which cannot find those of point and spot lights (docs/theory.md 2.1). \
-               Scenes with a heterogeneous medium always leave them to the camera path.",
+               path, which cannot find those of point and spot lights (docs/theory.md 2.1).",
         applies_to: MethodKind::MANY_LIGHT,
         conflicts_with: &[],
         requires: None,

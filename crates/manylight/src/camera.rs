@@ -19,8 +19,17 @@ pub struct CameraSegment {
 /// gathers on its first `MAX_SEGMENTS` intervals only (`gather.rs`).
 pub const MAX_SEGMENTS: usize = 64;
 
-/// The medium of a segment in the form the estimators take.
+/// The medium of a segment in the form the estimators take. A heterogeneous medium gets its
+/// homogeneous proxy (`docs/theory.md` §12.5): the mean of its majorant cells as `sigma_t` and
+/// the albedo volume's maximum; only importances and early-outs read it, the estimators evaluate
+/// the medium itself (`crate::hetero`).
 pub fn estimator_medium(scene: &Scene, id: MediumId) -> VrlMedium {
     let m = scene.medium(id);
-    VrlMedium { sigma_s: m.sigma_s(), sigma_t: m.sigma_t, phase: m.phase }
+    match &m.hetero {
+        None => VrlMedium { sigma_s: m.sigma_s(), sigma_t: m.sigma_t, phase: m.phase },
+        Some(h) => {
+            let sigma_t = h.mean_majorant();
+            VrlMedium { sigma_s: sigma_t * m.albedo, sigma_t, phase: m.phase }
+        }
+    }
 }

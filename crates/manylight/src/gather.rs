@@ -233,10 +233,20 @@ fn walk(
             let cs = c.cs;
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
-            st.beta = cs.tr_before
-                * transmittance(med.sigma_t, u)
-                * med.sigma_s()
-                * (cs.seg.len * candidates as f32 * c.scale);
+            st.beta = match med.hetero.as_deref() {
+                None => {
+                    cs.tr_before
+                        * transmittance(med.sigma_t, u)
+                        * med.sigma_s()
+                        * (cs.seg.len * candidates as f32 * c.scale)
+                }
+                // `T(0, u) sigma_s(x)` estimated (T31).
+                Some(h) => {
+                    cs.tr_before
+                        * crate::hetero::along(h, &cs.seg, cs.seg.at(u), sampler)
+                        * (cs.seg.len * candidates as f32 * c.scale)
+                }
+            };
             st.surface_seen = c.after_surface;
             let (d, _) = med.phase.sample(cs.seg.d, u2);
             st.ray = Ray::new(cs.seg.at(u), d);
@@ -299,21 +309,33 @@ fn walk_chain(
         let hit = scene.intersect(&st.ray);
         let len = hit.map_or(st.ray.t_max, |h| h.t);
         if let Some(m) = st.medium {
-            if st.gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
-                let cs = CameraSegment {
-                    seg: Segment::new(st.ray.o, st.ray.d, len),
-                    medium: m,
-                    tr_before: st.beta,
-                };
-                chain.push(ChainSegment {
-                    cs,
-                    after_surface: st.surface_seen,
-                    direct: st.direct,
-                    gathered: false,
-                    scale: 1.0,
-                });
+            let segment = |seg: Segment| ChainSegment {
+                cs: CameraSegment { seg, medium: m, tr_before: st.beta },
+                after_surface: st.surface_seen,
+                direct: st.direct,
+                gathered: false,
+                scale: 1.0,
+            };
+            match scene.medium(m).hetero.as_deref() {
+                None => {
+                    if st.gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
+                        chain.push(segment(Segment::new(st.ray.o, st.ray.d, len)));
+                    }
+                    st.beta *= transmittance(scene.medium(m).sigma_t, len);
+                }
+                Some(h) => {
+                    // The gathering segment is the part where the majorant is positive (the
+                    // medium is empty elsewhere, T27, T28, so the throughput there is `beta`); the walk
+                    // goes on with a ratio-tracking estimate of the interval's transmittance
+                    // (T30), independent of the estimates on the segment (docs/theory.md §12.5).
+                    if st.gathering && chain.len() < MAX_SEGMENTS {
+                        if let Some((a, b)) = h.clip(st.ray.o, st.ray.d, 0.0, len) {
+                            chain.push(segment(Segment::new(st.ray.at(a), st.ray.d, b - a)));
+                        }
+                    }
+                    st.beta *= h.transmittance(st.ray.o, st.ray.d, 0.0, len, sampler);
+                }
             }
-            st.beta *= transmittance(scene.medium(m).sigma_t, len);
         }
         let emitted = if st.surface_seen { Component::Surface } else { Component::Emitted };
         let Some(h) = hit else {

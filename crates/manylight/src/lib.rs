@@ -7,6 +7,7 @@
 
 pub mod camera;
 pub mod gather;
+mod hetero;
 pub mod integrators;
 pub mod lighttrace;
 mod memory;

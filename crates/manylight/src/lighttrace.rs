@@ -19,6 +19,18 @@
 //! the segment. [`VrlRecord::flux_at`] evaluates it. A VPL at a scattering vertex carries
 //! `beta sigma_s / mean(r)` after that vertex (`sigma_s` of the vertex included).
 //!
+//! ## Heterogeneous media (`docs/theory.md` §12.5, (T31))
+//! In a heterogeneous medium the free flight is sampled by delta tracking
+//! (`haze_scene::hetero::Heterogeneous::sample_free_flight`, the same weights as `volpath`), and
+//! a VPL sits at every real collision with flux `beta sigma_s(x) / mean(r)` (`sigma_s(x)` is in
+//! the flight's weight). The VRL is not the sampled piece: it is the whole segment up to the
+//! next surface, clipped to the majorant cells with a positive bound (the medium is empty
+//! elsewhere: `Heterogeneous::clip`), with
+//! `ratio = 0` and `beta` the light leaving its start, `beta / mean(r)`; the light at distance
+//! `v` is `beta T(0, v)` with the medium's transmittance, which the estimators estimate by ratio
+//! tracking along the VRL (`crate::hetero`). Its point at `v` exists with probability 1, so no
+//! pdf of the free flight enters, and the vertex delta tracking samples only continues the path.
+//!
 //! Dielectric interfaces are crossed with the adjoint BSDF: light tracing transports importance,
 //! so the `1/eta^2` radiance compression of refraction is not applied (Veach 1997, Sec. 5.2).
 
@@ -26,6 +38,7 @@ use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
 use haze_core::{Ray, Rgb, Sampler};
+use haze_scene::hetero::Flight;
 use haze_scene::lights::{EmissionError, EmissionSample};
 use haze_scene::{MediumId, Scene};
 use rayon::prelude::*;
@@ -39,7 +52,8 @@ pub struct VrlRecord {
     pub len: f32,
     /// Throughput at `o` in watts (emitted power / number of light paths / hero pdfs so far).
     pub beta: Rgb,
-    /// Spectral-MIS pdf ratios `p_c / p_hero` of the path up to `o`.
+    /// Spectral-MIS pdf ratios `p_c / p_hero` of the path up to `o`; zero for a VRL of a
+    /// heterogeneous medium, whose `beta` is then already `beta / mean(r)` (module docs).
     pub ratio: Rgb,
     pub medium: MediumId,
     /// True if the light path bounced off a non-null surface before this segment: paths through
@@ -52,6 +66,11 @@ impl VrlRecord {
     #[inline]
     pub fn flux_at(&self, sigma_t: Rgb, v: f32) -> Rgb {
         let t = sigma_t.exp_neg(v);
+        if self.ratio.is_black() {
+            // A VRL in a heterogeneous medium (module docs): `beta T(v)`, here with
+            // `T = exp(-sigma_t v)` for the caller's homogeneous `sigma_t`.
+            return self.beta * t;
+        }
         let m = (self.ratio * t).mean();
         if m > 0.0 {
             self.beta * t / m
@@ -61,8 +80,12 @@ impl VrlRecord {
     }
 
     /// Largest flux anywhere on the segment, per channel (for light-cluster bounds):
-    /// `Phi_c(v) <= 3 beta_c / r_c` because `mean(r T) >= r_c T_c / 3`.
+    /// `Phi_c(v) <= 3 beta_c / r_c` because `mean(r T) >= r_c T_c / 3`; `beta` for a zero
+    /// `ratio` (`T <= 1`).
     pub fn flux_bound(&self) -> Rgb {
+        if self.ratio.is_black() {
+            return self.beta;
+        }
         Rgb(std::array::from_fn(
             |c| if self.ratio[c] > 0.0 { 3.0 * self.beta[c] / self.ratio[c] } else { 0.0 },
         ))
@@ -264,45 +287,90 @@ fn trace_one(
         let t_surface = hit.map_or(f32::INFINITY, |h| h.t);
         if let Some(m) = medium {
             let med = scene.medium(m);
-            let ff = sample_free_flight(med.sigma_t, t_surface, hero, s.next_1d());
-            let len = match ff {
-                FreeFlight::Interaction { t, .. } => t,
-                FreeFlight::Pass { .. } => t_surface,
-            };
-            if len > 0.0 {
-                out.vrls.push(VrlRecord {
-                    o: ray.o,
-                    d: ray.d,
-                    len: len.min(max_len),
-                    beta: power * t,
-                    ratio: r,
-                    medium: m,
-                    after_surface,
-                });
-            }
-            match ff {
-                FreeFlight::Interaction { t: dist, weight, ratio } => {
-                    t *= weight * med.sigma_s();
-                    r *= ratio;
-                    let p = ray.at(dist);
-                    out.vpls.push(VplRecord {
-                        p,
-                        d_in: ray.d,
-                        flux: power * t / r.mean(),
+            if let Some(h) = &med.hetero {
+                // Heterogeneous (module docs): one VRL over the whole segment where the medium
+                // is (`clip`), carrying `T(0, v)` along itself, then delta tracking for the next
+                // vertex.
+                if let Some((a, b)) = h.clip(ray.o, ray.d, 0.0, t_surface.min(max_len)) {
+                    out.vrls.push(VrlRecord {
+                        o: ray.at(a),
+                        d: ray.d,
+                        len: b - a,
+                        beta: power * t / r.mean(),
+                        ratio: Rgb::ZERO,
                         medium: m,
                         after_surface,
                     });
-                    events += 1;
-                    if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
-                        return;
-                    }
-                    let (d, _) = med.phase.sample(ray.d, s.next_2d());
-                    ray = Ray::new(p, d);
-                    continue;
                 }
-                FreeFlight::Pass { weight, ratio } => {
-                    t *= weight;
-                    r *= ratio;
+                match h.sample_free_flight(ray.o, ray.d, t_surface, hero, s) {
+                    Flight::Scatter { t: dist, weight, ratio } => {
+                        // `weight` holds `sigma_s(x)` over the hero's pdf (T29).
+                        t *= weight;
+                        r *= ratio;
+                        let p = ray.at(dist);
+                        out.vpls.push(VplRecord {
+                            p,
+                            d_in: ray.d,
+                            flux: power * t / r.mean(),
+                            medium: m,
+                            after_surface,
+                        });
+                        events += 1;
+                        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings)
+                        {
+                            return;
+                        }
+                        let (d, _) = med.phase.sample(ray.d, s.next_2d());
+                        ray = Ray::new(p, d);
+                        continue;
+                    }
+                    Flight::Pass { weight, ratio } => {
+                        t *= weight;
+                        r *= ratio;
+                    }
+                }
+            } else {
+                let ff = sample_free_flight(med.sigma_t, t_surface, hero, s.next_1d());
+                let len = match ff {
+                    FreeFlight::Interaction { t, .. } => t,
+                    FreeFlight::Pass { .. } => t_surface,
+                };
+                if len > 0.0 {
+                    out.vrls.push(VrlRecord {
+                        o: ray.o,
+                        d: ray.d,
+                        len: len.min(max_len),
+                        beta: power * t,
+                        ratio: r,
+                        medium: m,
+                        after_surface,
+                    });
+                }
+                match ff {
+                    FreeFlight::Interaction { t: dist, weight, ratio } => {
+                        t *= weight * med.sigma_s();
+                        r *= ratio;
+                        let p = ray.at(dist);
+                        out.vpls.push(VplRecord {
+                            p,
+                            d_in: ray.d,
+                            flux: power * t / r.mean(),
+                            medium: m,
+                            after_surface,
+                        });
+                        events += 1;
+                        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings)
+                        {
+                            return;
+                        }
+                        let (d, _) = med.phase.sample(ray.d, s.next_2d());
+                        ray = Ray::new(p, d);
+                        continue;
+                    }
+                    FreeFlight::Pass { weight, ratio } => {
+                        t *= weight;
+                        r *= ratio;
+                    }
                 }
             }
         }

@@ -24,16 +24,19 @@ use crate::vrl::sampling::{equiangular_pdf, sample_equiangular};
 use crate::vrl::Segment;
 use glam::{Mat4, Vec2, Vec3};
 use haze_core::{Rgb, Sampler};
-use haze_render::integrators::transmittance_to;
+use haze_render::integrators::transmittance_to_sampled;
 use haze_scene::{Emitter, Scene};
 
 /// One-sample estimate of single scattering along `cs` from all emitters (`constant` emitters
-/// are excluded by `Scene::check_emission` before rendering).
+/// are excluded by `Scene::check_emission` before rendering). In a heterogeneous medium the
+/// equiangular distance is unchanged (it depends on geometry only) and the integrand's
+/// `T_c(u) sigma_s` and `Tr` are estimated (`docs/theory.md` §12.5).
 pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sampler) -> Rgb {
     let med = estimator_medium(scene, cs.medium);
     if med.sigma_s.is_black() || cs.seg.len <= 0.0 {
         return Rgb::ZERO;
     }
+    let hetero = scene.medium(cs.medium).hetero.as_deref();
     let mut total = Rgb::ZERO;
     for i in 0..scene.emitters.len() {
         let u_light = sampler.next_2d();
@@ -47,11 +50,20 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
             },
             _ => (0.0, cs.seg.len),
         };
-        // Equiangular parameters of the light point seen from the camera segment.
-        let delta = (light.p - cs.seg.o).dot(cs.seg.d);
-        let h = (light.p - cs.seg.at(delta)).length();
-        let Some(u) = sample_equiangular(u_dist, delta, h, a, b) else { continue };
-        let pdf = equiangular_pdf(u, delta, h, a, b);
+        let (u, pdf) = match &hetero {
+            None => {
+                // Equiangular parameters of the light point seen from the camera segment.
+                let delta = (light.p - cs.seg.o).dot(cs.seg.d);
+                let h = (light.p - cs.seg.at(delta)).length();
+                let Some(u) = sample_equiangular(u_dist, delta, h, a, b) else { continue };
+                (u, equiangular_pdf(u, delta, h, a, b))
+            }
+            // Mixed with the majorant's distance (docs/theory.md §12.5, (T35)).
+            Some(h) => match crate::hetero::single_distance(h, &cs.seg, light.p, (a, b), u_dist) {
+                Some(up) => up,
+                None => continue,
+            },
+        };
         if pdf.is_nan() || pdf <= 0.0 {
             continue;
         }
@@ -67,9 +79,21 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
             continue;
         }
         let phase = med.phase.eval(-wi, -cs.seg.d);
-        let tr = transmittance_to(scene, x, None, wi, dist, Some(cs.medium));
-        let cam = med.sigma_t.exp_neg(u);
-        total += cs.tr_before * cam * med.sigma_s * tr * e_val * (phase / (dist * dist * pdf));
+        // `T_c(u) sigma_s`: exact in a homogeneous medium; in a heterogeneous one `sigma_s(x)`
+        // and a ratio-tracking estimate of `T_c(u)` (T31), independent of the shadow ray's.
+        let (cam, sigma_s) = match &hetero {
+            None => (med.sigma_t.exp_neg(u), med.sigma_s),
+            Some(h) => {
+                let f = crate::hetero::along(h, &cs.seg, x, sampler);
+                if f.is_black() {
+                    continue;
+                }
+                (f, Rgb::ONE)
+            }
+        };
+        // Homogeneous media draw nothing here: bit for bit `transmittance_to`.
+        let tr = transmittance_to_sampled(scene, x, None, wi, dist, Some(cs.medium), sampler);
+        total += cs.tr_before * cam * sigma_s * tr * e_val * (phase / (dist * dist * pdf));
     }
     total
 }

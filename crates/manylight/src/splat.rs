@@ -26,7 +26,8 @@
 //! ```
 //!
 //! The path is then followed deterministically through media (`beta *= T(len)`, Beer-Lambert,
-//! no free-flight sampling: every segment is a beam) and by BSDF sampling through delta
+//! or a ratio-tracking estimate in a heterogeneous medium; no free-flight sampling: every
+//! segment is a beam) and by BSDF sampling through delta
 //! surfaces (adjoint: `eta^2` undone as in light tracing). It ends at its first non-delta
 //! surface, at the first surface if that is not a delta one, or when it leaves.
 //!
@@ -123,7 +124,7 @@ const CAUSTIC_STREAM: u64 = 0x5b1a_7c0f_fee0_0001;
 impl CausticTracer {
     /// `paths` caustic paths per pass, at most `max_events` delta vertices each; `None` if the
     /// scene has no delta surface or no point, spot or area emitter (then there are no such
-    /// caustics), if `paths` is 0, or if a medium is heterogeneous.
+    /// caustics), or if `paths` is 0.
     pub fn new(scene: &Scene, paths: u64, max_events: u32) -> Option<Self> {
         let targets: Vec<Target> = scene
             .shapes
@@ -131,9 +132,7 @@ impl CausticTracer {
             .filter(|s| s.bsdf.is_specular() && !s.bsdf.is_null())
             .filter_map(|s| bounding_sphere(&s.geometry))
             .collect();
-        // Heterogeneous media have no closed-form beam: there the continuation keeps these
-        // paths (`Gather::splats_caustics` is false without a tracer).
-        if targets.is_empty() || paths == 0 || scene.media.iter().any(|m| !m.is_homogeneous()) {
+        if targets.is_empty() || paths == 0 {
             return None;
         }
         let mut weights: Vec<(u32, f32)> = scene
@@ -299,11 +298,16 @@ impl CausticTracer {
                 let med = scene.medium(m);
                 let len = hit.map_or(max_len, |h| h.t).min(max_len);
                 if through_delta && len > 0.0 {
-                    if let Some(splat) = view.connect_beam(scene, ray.o, ray.d, len, m, beta, s.next_1d()) {
+                    let u = s.next_1d();
+                    if let Some(splat) = view.connect_beam(scene, ray.o, ray.d, len, m, beta, u, s) {
                         out.push(splat);
                     }
                 }
-                beta *= transmittance(med.sigma_t, len);
+                // A heterogeneous medium's beam by ratio tracking (docs/theory.md §12.4, §12.5).
+                match med.hetero.as_deref() {
+                    None => beta *= transmittance(med.sigma_t, len),
+                    Some(h) => beta *= h.transmittance(ray.o, ray.d, 0.0, len, s),
+                }
             }
             let Some(h) = hit else { return };
             let shape = &scene.shapes[h.shape as usize];
@@ -543,6 +547,7 @@ impl View {
         m: MediumId,
         beta: Rgb,
         u: f32,
+        s: &mut Sampler,
     ) -> Option<(f32, f32, Rgb)> {
         let med = scene.medium(m);
         let sigma_s = med.sigma_s();
@@ -564,7 +569,12 @@ impl View {
         if tr.is_black() {
             return None;
         }
-        let c = beta * transmittance(med.sigma_t, v) * sigma_s * tr * (f * theta_over_h * pr.density);
+        // `T(v) sigma_s`: exact in a homogeneous medium; in a heterogeneous one `sigma_s(x)` and a
+        // ratio-tracking estimate of `T(v)` (docs/theory.md §12.5, (T31)).
+        let c = match med.hetero.as_deref() {
+            None => beta * transmittance(med.sigma_t, v) * sigma_s * tr * (f * theta_over_h * pr.density),
+            Some(h) => beta * crate::hetero::along(h, &seg, x, s) * tr * (f * theta_over_h * pr.density),
+        };
         Some((pr.px, pr.py, c))
     }
 

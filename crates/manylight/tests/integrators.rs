@@ -444,3 +444,171 @@ fn glass_beam_renders_with_every_integrator_without_nan() {
         assert!(f.image_mean(Some(Component::Surface)).iter().all(|v| *v > 0.0));
     }
 }
+
+/// A smoke grid of `N^3` cells: a lumpy blob (density falling off from a centre, modulated
+/// per cell), strongly varying from cell to cell so that a lookup half a cell off changes the
+/// image; three channels (chromatic extinction) when `rgb`.
+fn smoke_grid(rgb: bool) -> haze_scene::volume::Grid {
+    const N: u32 = 6;
+    let channels = if rgb { 3 } else { 1 };
+    haze_scene::volume::Grid::from_fn([N; 3], channels, (glam::Vec3::ZERO, glam::Vec3::ONE), |x, y, z, c| {
+        let p = (glam::Vec3::new(x as f32, y as f32, z as f32) + 0.5) / N as f32 - 0.5;
+        let blob = (1.0 - p.length() / 0.55).max(0.0);
+        let lumps = ((x * 7 + y * 3 + z * 5) % 4) as f32 / 3.0;
+        blob * (0.3 + 1.7 * lumps) * [1.0, 0.7, 0.45][c as usize]
+    })
+}
+
+/// One of the two heterogeneous test scenes, in a fresh temporary directory: `room` is a
+/// closed room of diffuse walls filled with smoke (the camera and a point light inside, the
+/// walls lit through the smoke); otherwise a chromatic smoke puff behind a null cube, lit by a
+/// spot light from the side, the camera in vacuum, a floor below. `offset` shifts the grid by
+/// that many cells along x (the negative control's perturbed density lookup).
+fn smoke_scene(room: bool, offset: f32) -> Scene {
+    let dir =
+        std::env::temp_dir().join(format!("haze-manylight-smoke-{}-{room}-{offset}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("smoke.vol"), smoke_grid(!room).to_vol_bytes()).unwrap();
+    let size = 1.2f32;
+    let shift = offset * size / 6.0;
+    let medium = format!(
+        r#"<medium id="smoke" type="heterogeneous"><float name="scale" value="{scale}"/>
+             <volume name="sigma_t" type="gridvolume"><string name="filename" value="smoke.vol"/>
+               <transform name="to_world"><scale value="{size}"/><translate x="{tx}" y="{ty}" z="-0.6"/></transform></volume>
+             <rgb name="albedo" value="0.9, 0.8, 0.7"/>
+             <phase type="hg"><float name="g" value="0.3"/></phase></medium>"#,
+        scale = if room { 3.0 } else { 4.0 },
+        tx = -0.6 + shift,
+        ty = if room { 0.3 } else { -0.6 },
+    );
+    let xml = if room {
+        format!(
+            r#"<scene version="3.0.0">
+            <integrator type="volpath"><integer name="max_depth" value="-1"/></integrator>
+            {medium}
+            <sensor type="perspective"><float name="fov" value="70"/>
+              <transform name="to_world"><lookat origin="0, 1, 1.8" target="0, 0.9, 0" up="0, 1, 0"/></transform>
+              <ref id="smoke"/>
+              <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film></sensor>
+            <shape type="cube"><boolean name="flip_normals" value="true"/>
+              <transform name="to_world"><scale x="1.5" y="1.2" z="2"/><translate y="1.2"/></transform>
+              <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.55, 0.5"/></bsdf>
+              <ref name="exterior" id="smoke"/></shape>
+            <emitter type="point"><point name="position" x="0.5" y="2.1" z="-0.9"/><rgb name="intensity" value="4, 4, 4"/></emitter>
+            </scene>"#
+        )
+    } else {
+        format!(
+            r#"<scene version="3.0.0">
+            <integrator type="volpath"><integer name="max_depth" value="8"/></integrator>
+            {medium}
+            <sensor type="perspective"><float name="fov" value="40"/>
+              <transform name="to_world"><lookat origin="0.3, 0.6, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+              <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film></sensor>
+            <shape type="cube"><bsdf type="null"/><ref name="interior" id="smoke"/>
+              <transform name="to_world"><scale value="0.75"/></transform></shape>
+            <shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/><translate y="-0.9"/></transform>
+              <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>
+            <emitter type="spot"><transform name="to_world"><lookat origin="-2.5, 1.5, 0.5" target="0, 0, 0" up="0, 1, 0"/></transform>
+              <rgb name="intensity" value="40, 40, 40"/><float name="cutoff_angle" value="25"/></emitter>
+            </scene>"#
+        )
+    };
+    let scene = haze_scene::load_str(&xml, &dir.join("smoke.xml"), &dir, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(scene.media.iter().all(|m| !m.is_homogeneous()));
+    scene
+}
+
+/// `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` in a heterogeneous medium against
+/// `volpath` (delta and ratio tracking), every component, on the two smoke scenes
+/// (`docs/theory.md` §12.5: light paths by delta tracking, VRLs carrying their transmittance,
+/// every transmittance of the estimators by ratio tracking). Negative control: the many-light
+/// image of the smoke with its density looked up half a cell off fails the same test.
+fn check_smoke(room: bool) {
+    let label = if room { "smoke room " } else { "smoke puff " };
+    let scene = smoke_scene(room, 0.0);
+    let (paths, passes) = (20, 48);
+    let reference = check_against_volpath(&scene, label, paths, passes, true);
+    let perturbed = smoke_scene(room, 0.5);
+    let vrl = VrlIntegrator::new(&perturbed, settings(&perturbed, paths), 1).unwrap();
+    let wrong = render_passes(&perturbed, &vrl, 4 * passes, 1, 1);
+    let mut caught = Vec::new();
+    for comp in Component::ALL {
+        let (r, mean_z) = compare(&wrong, &reference, comp);
+        println!("{label}vrl, density half a cell off, {}: {r}; image-mean z = {mean_z:.2}", comp.name());
+        if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
+            caught.push(comp.name());
+        }
+    }
+    assert!(!caught.is_empty(), "{label}: the density lookup half a cell off went unnoticed");
+}
+
+#[test]
+fn smoke_room_heterogeneous_matches_volpath() {
+    check_smoke(true);
+}
+
+#[test]
+fn smoke_puff_heterogeneous_matches_volpath() {
+    check_smoke(false);
+}
+
+/// The caustic paths in a heterogeneous medium (their beams and splatted points with
+/// ratio-tracked transmittances and `sigma_s(x)`, `docs/theory.md` §12.5) against the camera
+/// continuation through the same smoke (ratio tracking along the camera walk), by the paired
+/// test of [`caustic_paths_match_the_camera_continuation`] on `tests/data/caustic-room.xml`
+/// with its haze replaced by a lumpy smoke grid over the room (box filter). Negative control:
+/// splats 20% too bright fail the paired test.
+#[test]
+fn caustic_paths_match_the_camera_continuation_in_smoke() {
+    let dir = std::env::temp_dir().join(format!("haze-manylight-caustic-smoke-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("smoke.vol"), smoke_grid(false).to_vol_bytes()).unwrap();
+    let path = haze_testkit::data::repo_root().join("tests/data/caustic-room.xml");
+    let xml = std::fs::read_to_string(&path).unwrap();
+    let (a, b) = (xml.find("<medium").unwrap(), xml.find("</medium>").unwrap() + "</medium>".len());
+    // The room is [-1.5, 1.5] x [0, 2.4] x [-1.5, 1.5]; the grid fills it.
+    let smoke = r#"<medium type="heterogeneous" id="haze"><float name="scale" value="0.6"/>
+        <volume name="sigma_t" type="gridvolume"><string name="filename" value="smoke.vol"/>
+          <transform name="to_world"><scale x="3" y="2.4" z="3"/><translate x="-1.5" z="-1.5"/></transform></volume>
+        <rgb name="albedo" value="0.9, 0.9, 0.9"/><phase type="hg"><float name="g" value="0.2"/></phase></medium>"#;
+    let xml = format!("{}{smoke}{}", &xml[..a], &xml[b..]);
+    let mut scene = haze_scene::load_str(&xml, &dir.join("caustic-smoke.xml"), &dir, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(!scene.media[0].is_homogeneous());
+    (scene.camera.width, scene.camera.height) = (16, 12);
+    let (paths, passes) = (20, 32);
+    let with = |caustic_paths: u64| ManyLightSettings {
+        caustic_paths: Some(caustic_paths),
+        ..settings(&scene, paths)
+    };
+    let paired_z = |a: &Passes, b: &Passes| {
+        let s = Component::Surface as usize;
+        let d: Vec<f64> = a
+            .pass_means
+            .iter()
+            .zip(&b.pass_means)
+            .map(|(x, y)| (x[s].iter().sum::<f64>() - y[s].iter().sum::<f64>()) / 3.0)
+            .collect();
+        let n = d.len() as f64;
+        let mean = d.iter().sum::<f64>() / n;
+        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+        mean / (var / n).sqrt()
+    };
+    let continuation = render_passes(&scene, &VrlIntegrator::new(&scene, with(0), 1).unwrap(), passes, 16, 1);
+    let mut splatting = VrlIntegrator::new(&scene, with(2000), 1).unwrap();
+    let splats = render_passes(&scene, &splatting, passes, 16, 1);
+    let (r, _) = compare(&splats, &continuation, Component::Surface);
+    let z = paired_z(&splats, &continuation);
+    let mut failures = Vec::new();
+    judge(&mut failures, "smoke: caustic paths vs continuation (paired z)", &r, z, 0.01);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    splatting.caustic_scale = 1.2;
+    let wrong = render_passes(&scene, &splatting, passes, 16, 1);
+    let z = paired_z(&wrong, &continuation);
+    println!("smoke: caustic splats x 1.2: paired image-mean z = {z:.2}");
+    assert!(z.abs() > 5.0, "20% too bright caustic splats in smoke went unnoticed: paired z = {z:.2}");
+}

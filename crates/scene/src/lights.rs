@@ -179,11 +179,6 @@ pub enum EmissionError {
     /// `constant` and `envmap` (environment) emitters have no finite emitting surface to start
     /// paths from.
     Environment,
-    /// The many-light integrators do not handle heterogeneous media yet: their VRLs, VPLs and
-    /// estimators assume constant coefficients, and would render such a medium wrong.
-    HeterogeneousMedium {
-        medium: String,
-    },
 }
 
 impl std::fmt::Display for EmissionError {
@@ -194,11 +189,6 @@ impl std::fmt::Display for EmissionError {
                 f,
                 "light tracing does not support 'constant' or 'envmap' (environment) emitters; use volpath for this scene"
             ),
-            EmissionError::HeterogeneousMedium { medium } => write!(
-                f,
-                "medium '{medium}' is heterogeneous, and the many-light integrators (vrl, vpl, vrl_lightcuts, \
-                 vpl_lightcuts) and light tracing support only homogeneous media; use volpath for this scene"
-            ),
         }
     }
 }
@@ -206,12 +196,9 @@ impl std::fmt::Display for EmissionError {
 impl std::error::Error for EmissionError {}
 
 impl Scene {
-    /// Checks that every emitter can start light paths, and that every medium is one light
-    /// paths and the many-light estimators handle (homogeneous).
+    /// Checks that every emitter can start light paths (heterogeneous media are fine:
+    /// `docs/theory.md` §12.5).
     pub fn check_emission(&self) -> Result<(), EmissionError> {
-        if let Some(m) = self.media.iter().find(|m| !m.is_homogeneous()) {
-            return Err(EmissionError::HeterogeneousMedium { medium: m.name.clone() });
-        }
         if self.emitters.is_empty() {
             return Err(EmissionError::NoEmitters);
         }

@@ -15,7 +15,8 @@ pub type MediumId = u32;
 /// Heterogeneous (`hetero` is `Some`): the coefficients vary in space and live in `hetero`;
 /// `sigma_t` then holds the global majorant and `albedo` the albedo volume's maximum, bounds
 /// and never the medium itself: code that reads them must branch on [`Medium::is_homogeneous`]
-/// (the many-light integrators refuse such scenes, `Scene::check_emission`).
+/// (the many-light estimators use `hetero`'s coefficients and ratio tracking there,
+/// `docs/theory.md` §12.5).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Medium {
     /// The XML `id`, for messages.

@@ -141,6 +141,10 @@ pub(crate) fn surface_vpl_to_segment(
     key: u64,
     clamp: Option<f32>,
 ) -> haze_core::Rgb {
+    if crate::hetero::any(scene) {
+        let u = light_uniforms(key, SURFACE_VPL_STREAM | i as u32);
+        return crate::hetero::surface_vpl_to_segment(scene, vpl, cs, cam_medium, u, clamp);
+    }
     let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
     crate::vpl::sample_point_light_to_segment(
         &cs.seg,

@@ -34,6 +34,8 @@ pub struct VplPass {
     groups: [Vec<Vpl>; 2],
     surface_vpls: Vec<SurfaceVpl>,
     media: Vec<VrlMedium>,
+    /// The scene has a heterogeneous medium: every light goes through `crate::hetero`.
+    hetero: bool,
     splats: CameraSplats,
 }
 
@@ -64,7 +66,13 @@ impl Integrator for VplIntegrator {
         let groups = split_groups(&set.vpls, |r| r.after_surface, VplRecord::to_vpl);
         let splats =
             self.caustics.as_ref().map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass));
-        VplPass { groups, surface_vpls: surface_vpls(&set), media: media(scene), splats }
+        VplPass {
+            groups,
+            surface_vpls: surface_vpls(&set),
+            media: media(scene),
+            hetero: crate::hetero::any(scene),
+            splats,
+        }
     }
 
     fn pixel_light(&self, pass: &VplPass, pixel: u64) -> Rgb {
@@ -104,6 +112,14 @@ impl Gather for VplGather<'_> {
         let cam_medium = &pass.media[cs.medium as usize];
         let sums = [0, 1].map(|g| {
             let mut sum = Rgb::ZERO;
+            if pass.hetero {
+                for (i, vpl) in pass.groups[g].iter().enumerate() {
+                    let u = light_uniforms(key, i as u32);
+                    sum +=
+                        crate::hetero::vpl_to_segment(scene, cs, &pass.media, vpl, u, self.integrator.clamp);
+                }
+                return sum;
+            }
             for (i, vpl) in pass.groups[g].iter().enumerate() {
                 sum += sample_vpl_contribution(
                     &cs.seg,

@@ -48,6 +48,8 @@ pub struct VrlPass {
     groups: [Vec<Vrl>; 2],
     surface_vpls: Vec<SurfaceVpl>,
     media: Vec<VrlMedium>,
+    /// The scene has a heterogeneous medium: every light goes through `crate::hetero`.
+    hetero: bool,
     splats: CameraSplats,
 }
 
@@ -94,7 +96,13 @@ impl Integrator for VrlIntegrator {
             .caustics
             .as_ref()
             .map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass).scaled(self.caustic_scale));
-        VrlPass { groups, surface_vpls: surface_vpls(&set), media: media(scene), splats }
+        VrlPass {
+            groups,
+            surface_vpls: surface_vpls(&set),
+            media: media(scene),
+            hetero: crate::hetero::any(scene),
+            splats,
+        }
     }
 
     fn pixel_light(&self, pass: &VrlPass, pixel: u64) -> Rgb {
@@ -130,8 +138,23 @@ impl Gather for VrlGather<'_> {
         let cam_medium = &pass.media[cs.medium as usize];
         let n = pass.groups[0].len() + pass.groups[1].len() + pass.surface_vpls.len();
         self.integrator.evaluations.fetch_add(n as u64, Ordering::Relaxed);
-        let sums =
-            [0, 1].map(|g| sum_contributions(scene, &cs.seg, cam_medium, &pass.groups[g], &pass.media, key));
+        let sums = [0, 1].map(|g| {
+            if pass.hetero {
+                let mut sum = Rgb::ZERO;
+                for (i, vrl) in pass.groups[g].iter().enumerate() {
+                    sum += crate::hetero::vrl_to_segment(
+                        scene,
+                        cs,
+                        &pass.media,
+                        vrl,
+                        light_uniforms(key, i as u32),
+                    );
+                }
+                sum
+            } else {
+                sum_contributions(scene, &cs.seg, cam_medium, &pass.groups[g], &pass.media, key)
+            }
+        });
         let surface =
             surface_vpls_to_segment(scene, &pass.surface_vpls, cs, cam_medium, key, self.integrator.clamp);
         [sums[0], sums[1] + surface]
@@ -148,15 +171,23 @@ impl Gather for VrlGather<'_> {
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
         let mut sum = Rgb::ZERO;
-        for (i, vrl) in pass.groups.iter().flatten().enumerate() {
-            sum += sample_vrl_to_point(
-                gp.p,
-                |d| gp.reflectance(d),
-                vrl,
-                &pass.media[vrl.medium as usize],
-                light_uniforms(key, i as u32).x,
-                |y, x| connect(scene, vrl.medium, y, x),
-            );
+        let lights = pass.groups.iter().flatten().enumerate();
+        if pass.hetero {
+            for (i, vrl) in lights {
+                let u = light_uniforms(key, i as u32).x;
+                sum += crate::hetero::vrl_to_point(scene, gp.p, |d| gp.reflectance(d), &pass.media, vrl, u);
+            }
+        } else {
+            for (i, vrl) in lights {
+                sum += sample_vrl_to_point(
+                    gp.p,
+                    |d| gp.reflectance(d),
+                    vrl,
+                    &pass.media[vrl.medium as usize],
+                    light_uniforms(key, i as u32).x,
+                    |y, x| connect(scene, vrl.medium, y, x),
+                );
+            }
         }
         (sum + surface_vpls_to_point(scene, &pass.surface_vpls, gp, self.integrator.clamp))
             * self.integrator.gather_point_scale

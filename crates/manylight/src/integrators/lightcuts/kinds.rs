@@ -90,6 +90,9 @@ impl ClusterKind for Vrls {
         key: u64,
         index: u32,
     ) -> Rgb {
+        if crate::hetero::any(scene) {
+            return crate::hetero::vrl_to_segment(scene, cs, media, vrl, light_uniforms(key, index));
+        }
         sample_vrl_contribution(
             &cs.seg,
             &media[cs.medium as usize],
@@ -100,6 +103,9 @@ impl ClusterKind for Vrls {
         )
     }
     fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
+        if crate::hetero::any(scene) {
+            return crate::hetero::vrl_to_point(scene, gp.p, |d| gp.reflectance(d), media, vrl, u);
+        }
         sample_vrl_to_point(
             gp.p,
             |d| gp.reflectance(d),
@@ -135,6 +141,9 @@ impl ClusterKind for Vpls {
         key: u64,
         index: u32,
     ) -> Rgb {
+        if crate::hetero::any(scene) {
+            return crate::hetero::vpl_to_segment(scene, cs, media, vpl, light_uniforms(key, index), None);
+        }
         sample_vpl_contribution(
             &cs.seg,
             &media[cs.medium as usize],
