@@ -32,16 +32,16 @@ mod watertight;
 mod wide;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
-use wide::{leaf_children, WideBvh, WideRay};
+use wide::{leaf_children, WideBvh, WideRay, LEAF};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
 use crate::shape::{Geometry, Shape};
-use glam::{Mat4, UVec2, Vec2, Vec3, Vec3A};
+use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::{builder::build_cwbvh, CwBvh, Traversal};
-use obvhs::ray::Ray as BvhRay;
+use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
+use obvhs::ray::safe_inverse;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
@@ -109,6 +109,18 @@ enum Analytic {
     Sphere { shape: u32, center: Vec3, radius: f32, flip: bool },
     Disk { shape: u32, to_world: Mat4, inv: Mat4, normal: Vec3 },
 }
+
+/// A pushed child of the traversal: a node or [`LEAF`]-tagged leaf, and where the ray enters
+/// its box.
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    node: u32,
+    t: f32,
+}
+
+/// Entries of the traversal's fixed stack; trees that may need more get one of their size
+/// ([`WideBvh::stack_need`]).
+const STACK: usize = 64;
 
 /// Triangle hits closer than this to the ray origin are ignored. Rays leaving a surface start
 /// at an offset origin (`haze_core::ray::offset_origin`), so this only has to exclude hits at
@@ -278,32 +290,104 @@ impl Accel {
         Accel { bvh, tris, leaves, leaf_of, analytic, lo, hi }
     }
 
-    /// obvhs's `traverse!` loop over the decoded nodes for the traversal ray `r` (the backed-off
-    /// origin, see the module documentation). `test(leaf, t_max)` tests the triangles of a leaf
-    /// the ray reaches and returns the new `t_max` in the traversal's parametrisation (below the
-    /// old one for a closer hit: nodes beyond it are pruned), or `None` to end the traversal.
+    /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
+    /// (the backed-off origin, see the module documentation) up to `t_max`. `test(leaf, t_max)`
+    /// tests the triangles of a leaf the ray reaches and returns the new `t_max` in the
+    /// traversal's parametrisation (below the old one for a closer hit), or `None` to end the
+    /// traversal.
+    ///
+    /// The hit children of a node are visited nearest entry first, the others kept on a stack
+    /// with their entry distance and skipped when popped beyond the current `t_max` (Embree's
+    /// order, Wald et al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing",
+    /// section 4.2). obvhs's `traverse!` instead visits children in an order fixed per ray octant
+    /// and cannot prune a pushed group by distance, so a closest-hit ray tested boxes and leaves
+    /// behind its hit (docs/performance.md, "Front-to-back traversal").
     #[inline(always)]
-    fn traverse(&self, wide: &WideBvh, r: &BvhRay, mut test: impl FnMut(&Leaf, f32) -> Option<f32>) {
-        let ray = WideRay::new(r.origin, r.direction, r.inv_direction, 0.0);
-        let mut t_max = r.tmax;
-        // `CwBvh::new_traversal` for a tree with nodes (`WideBvh` always has a root).
-        let mut state = Traversal::default();
-        state.reinit(r.direction);
-        let mut node = &wide.nodes[0];
-        'outer: {
-            obvhs::traverse!(wide, node, state, node.intersect(&ray, t_max, state.oct_inv4), {
-                // A hit leaf child sets its whole run of primitive bits and obvhs hands out the
-                // highest bit first, so this is the last triangle of its leaf: test the leaf
-                // and clear the rest of its run.
-                let local = state.primitive_id - state.primitive_group.x;
-                let leaf = &self.leaves[node.leaf(local) as usize];
-                let run = state.primitive_id - leaf.first;
-                state.primitive_group.y &= !(((1u32 << run) - 1) << (local - run));
-                match test(leaf, t_max) {
+    fn traverse<const ORDERED: bool>(
+        &self,
+        wide: &WideBvh,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
+        test: impl FnMut(&Leaf, f32) -> Option<f32>,
+    ) {
+        if wide.stack_need <= STACK {
+            let mut stack = [Entry::default(); STACK];
+            self.traverse_with::<ORDERED>(wide, o, d, t_max, &mut stack[..], test);
+        } else {
+            // A degenerate tree (deeper than any scene measured needs): a stack of its size.
+            let n = wide.stack_need.min(wide.nodes.len() * 8 + 1);
+            self.traverse_with::<ORDERED>(wide, o, d, t_max, &mut vec![Entry::default(); n][..], test);
+        }
+    }
+
+    #[inline(always)]
+    fn traverse_with<const ORDERED: bool>(
+        &self,
+        wide: &WideBvh,
+        o: Vec3A,
+        d: Vec3A,
+        mut t_max: f32,
+        stack: &mut [Entry],
+        mut test: impl FnMut(&Leaf, f32) -> Option<f32>,
+    ) {
+        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+        let ray = WideRay::new(o, d, inv, 0.0);
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                match test(&self.leaves[(cur & !LEAF) as usize], t_max) {
                     Some(t) => t_max = t,
-                    None => break 'outer,
+                    None => return,
                 }
-            });
+            } else {
+                let node = &wide.nodes[cur as usize];
+                let (mut mask, [lo0, lo1]) = node.intersect(&ray, t_max);
+                if mask != 0 {
+                    let c = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.children[c];
+                        continue;
+                    }
+                    // Two or more hit children: onto the stack sorted farthest first
+                    // (insertion sort, at most 8), then continue with the nearest.
+                    let t_near: [f32; 8] = {
+                        let (a, b) = (lo0.to_array(), lo1.to_array());
+                        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+                    };
+                    let base = sp;
+                    stack[sp] = Entry { node: node.children[c], t: t_near[c] };
+                    sp += 1;
+                    while mask != 0 {
+                        let c = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let e = Entry { node: node.children[c], t: t_near[c] };
+                        let mut j = sp;
+                        while ORDERED && j > base && stack[j - 1].t < e.t {
+                            stack[j] = stack[j - 1];
+                            j -= 1;
+                        }
+                        stack[j] = e;
+                        sp += 1;
+                    }
+                    sp -= 1;
+                    cur = stack[sp].node;
+                    continue;
+                }
+            }
+            // Next: the nearest pushed child still in front of the closest hit.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                if !ORDERED || stack[sp].t <= t_max {
+                    cur = stack[sp].node;
+                    break;
+                }
+            }
         }
     }
 
@@ -323,8 +407,7 @@ impl Accel {
             // The closest hit so far, kept here in the real parametrisation; obvhs only sees
             // the shifted distances, for pruning.
             let mut closest: Option<(usize, f32, f32, f32)> = None;
-            let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(t_max));
-            self.traverse(bvh, &r, |leaf, shifted_max| {
+            self.traverse::<true>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(t_max), |leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                 let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
                 Some(match hits.closest() {
@@ -428,16 +511,21 @@ impl Accel {
             let d: Vec3A = ray.d.into();
             let mut wt: Option<WatertightRay> = None;
             let mut blocked = false;
-            let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
-            self.traverse(bvh, &r, |leaf, shifted_max| {
-                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
-                    blocked = true;
-                    None
-                } else {
-                    Some(shifted_max)
-                }
-            });
+            self.traverse::<false>(
+                bvh,
+                o - d * ORIGIN_BACKOFF,
+                d,
+                shifted(ray.t_max),
+                |leaf, shifted_max| {
+                    let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                    if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
+                        blocked = true;
+                        None
+                    } else {
+                        Some(shifted_max)
+                    }
+                },
+            );
             if blocked {
                 return true;
             }
@@ -482,8 +570,7 @@ impl Accel {
         let mut blocked = false;
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
-        let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
-        self.traverse(bvh, &r, |leaf, shifted_max| {
+        self.traverse::<false>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(ray.t_max), |leaf, shifted_max| {
             let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
             let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
             let mut m = found.mask;
