@@ -73,8 +73,8 @@ struct TriRef {
     blocks: bool,
 }
 
-/// Where a triangle in BVH leaf order came from.
-#[derive(Clone, Copy, Debug)]
+/// Where a triangle of a leaf came from.
+#[derive(Clone, Copy, Debug, Default)]
 struct TriId {
     shape: u32,
     prim: u32,
@@ -84,6 +84,7 @@ struct TriId {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShadowHit {
     pub t: f32,
+    /// The leaf's index times 4 plus the triangle's lane in it.
     tri: u32,
     b1: f32,
     b2: f32,
@@ -154,12 +155,13 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
     }
 }
 
-/// A BVH leaf: its triangles transposed for [`WatertightRay::intersect_packet`], and the index
-/// (in leaf order, into `Accel::tris`) of the first.
+/// A BVH leaf: its triangles transposed for [`WatertightRay::intersect_packet`] and where each
+/// came from. The hit's shape and primitive are read from here, not from an array indexed by
+/// triangle: the leaf is in cache after its test, another array is a cache miss per hit.
 #[derive(Clone, Copy, Debug)]
 struct Leaf {
     packet: TriPacket,
-    first: u32,
+    ids: [TriId; 4],
     /// Bit `i` set when triangle `i` stops shadow rays ([`TriRef::blocks`]).
     blocks: u32,
 }
@@ -167,12 +169,8 @@ struct Leaf {
 pub struct Accel {
     /// The tree obvhs built, its nodes decoded ([`wide`]): what traversal reads.
     bvh: Option<WideBvh>,
-    /// Shape and primitive of each triangle in leaf order (the vertices are in `leaves`).
-    tris: Vec<TriId>,
     /// Every BVH leaf's triangles as one packet (obvhs puts at most 3 in a leaf).
     leaves: Vec<Leaf>,
-    /// For each triangle in leaf order, the index in `leaves` of its leaf.
-    leaf_of: Vec<u32>,
     analytic: Vec<Analytic>,
     lo: Vec3,
     hi: Vec3,
@@ -190,12 +188,11 @@ fn build_params(triangles: usize) -> BvhBuildParams {
 }
 
 /// One [`Leaf`] per leaf child of every node of `bvh`, in node order and by primitive offset
-/// within a node (the order [`wide::WideNode::leaf`] counts in); for each node the index of its
-/// first leaf; for each triangle (in leaf order, as in `tris`) the index of its leaf.
-fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>, Vec<u32>) {
+/// within a node (the order [`wide::WideBvh::new`] numbers a node's leaves in), and for each node
+/// the index of its first leaf.
+fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>) {
     let mut leaves = Vec::new();
     let mut leaf_base = Vec::with_capacity(bvh.nodes.len());
-    let mut leaf_of = vec![u32::MAX; tris.len()];
     for node in &bvh.nodes {
         leaf_base.push(leaves.len() as u32);
         let mut children: Vec<(u32, u32)> = leaf_children(node).collect();
@@ -205,12 +202,13 @@ fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>, Vec<u32>)
             let run = &tris[first..first + count as usize];
             let soa: Vec<TriSoa> = run.iter().map(|t| t.v).collect();
             let blocks = run.iter().enumerate().fold(0, |m, (lane, t)| m | u32::from(t.blocks) << lane);
-            leaf_of[first..first + count as usize].fill(leaves.len() as u32);
-            leaves.push(Leaf { packet: TriPacket::new(&soa), first: first as u32, blocks });
+            let ids = std::array::from_fn(|lane| {
+                run.get(lane).map_or(TriId::default(), |t| TriId { shape: t.shape, prim: t.prim })
+            });
+            leaves.push(Leaf { packet: TriPacket::new(&soa), ids, blocks });
         }
     }
-    debug_assert!(leaf_of.iter().all(|&l| l != u32::MAX), "a triangle in no leaf");
-    (leaves, leaf_base, leaf_of)
+    (leaves, leaf_base)
 }
 
 impl Accel {
@@ -265,8 +263,8 @@ impl Accel {
                 }
             }
         }
-        let (bvh, tris, leaves, leaf_of) = if flat.is_empty() {
-            (None, Vec::new(), Vec::new(), Vec::new())
+        let (bvh, leaves) = if flat.is_empty() {
+            (None, Vec::new())
         } else {
             let magnitude = flat
                 .iter()
@@ -282,12 +280,11 @@ impl Accel {
                 .collect();
             let bvh = build_cwbvh(&boxes, build_params(flat.len()), &mut Default::default());
             let tris: Vec<TriRef> = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
-            let (leaves, leaf_base, leaf_of) = leaf_packets(&bvh, &tris);
+            let (leaves, leaf_base) = leaf_packets(&bvh, &tris);
             let wide = WideBvh::new(&bvh, &leaf_base);
-            let tris = tris.iter().map(|t| TriId { shape: t.shape, prim: t.prim }).collect();
-            (Some(wide), tris, leaves, leaf_of)
+            (Some(wide), leaves)
         };
-        Accel { bvh, tris, leaves, leaf_of, analytic, lo, hi }
+        Accel { bvh, leaves, analytic, lo, hi }
     }
 
     /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
@@ -309,7 +306,7 @@ impl Accel {
         o: Vec3A,
         d: Vec3A,
         t_max: f32,
-        test: impl FnMut(&Leaf, f32) -> Option<f32>,
+        test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
         if wide.stack_need <= STACK {
             let mut stack = [Entry::default(); STACK];
@@ -329,7 +326,7 @@ impl Accel {
         d: Vec3A,
         mut t_max: f32,
         stack: &mut [Entry],
-        mut test: impl FnMut(&Leaf, f32) -> Option<f32>,
+        mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
         let ray = WideRay::new(o, d, inv, 0.0);
@@ -337,7 +334,8 @@ impl Accel {
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                match test(&self.leaves[(cur & !LEAF) as usize], t_max) {
+                let leaf = cur & !LEAF;
+                match test(leaf, &self.leaves[leaf as usize], t_max) {
                     Some(t) => t_max = t,
                     None => return,
                 }
@@ -406,8 +404,8 @@ impl Accel {
             let mut wt: Option<WatertightRay> = None;
             // The closest hit so far, kept here in the real parametrisation; obvhs only sees
             // the shifted distances, for pruning.
-            let mut closest: Option<(usize, f32, f32, f32)> = None;
-            self.traverse::<true>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(t_max), |leaf, shifted_max| {
+            let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
+            self.traverse::<true>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(t_max), |index, leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                 let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
                 Some(match hits.closest() {
@@ -415,14 +413,14 @@ impl Accel {
                         let t = hits.t[lane];
                         t_max = t;
                         let (b1, b2) = hits.barycentrics(lane);
-                        closest = Some((leaf.first as usize + lane, t, b1, b2));
+                        closest = Some((index, lane, t, b1, b2));
                         shifted(t)
                     }
                     None => shifted_max,
                 })
             });
-            if let Some((i, t, b1, b2)) = closest {
-                best = Some(self.triangle_interaction(shapes, i, t, b1, b2));
+            if let Some((leaf, lane, t, b1, b2)) = closest {
+                best = Some(self.triangle_interaction(shapes, leaf, lane, t, b1, b2));
             }
         }
         for a in &self.analytic {
@@ -466,18 +464,19 @@ impl Accel {
     fn triangle_interaction(
         &self,
         shapes: &[Shape],
-        i: usize,
+        leaf: u32,
+        lane: usize,
         t: f32,
         b1: f32,
         b2: f32,
     ) -> SurfaceInteraction {
-        let tri = self.tris[i];
+        let leaf = &self.leaves[leaf as usize];
+        let tri = leaf.ids[lane];
         let Geometry::Mesh(m) = &shapes[tri.shape as usize].geometry else {
             unreachable!("triangles come from meshes")
         };
         let b0 = 1.0 - b1 - b2;
-        let leaf = &self.leaves[self.leaf_of[i] as usize];
-        let v = leaf.packet.triangle(i - leaf.first as usize);
+        let v = leaf.packet.triangle(lane);
         let [v0, v1, v2] = [0, 1, 2].map(|j| Vec3::from(v.vertex(j)));
         // Barycentric interpolation is more precise than o + t d far from the origin.
         let p = pull_inside(v0 * b0 + v1 * b1 + v2 * b2, [v0, v1, v2]);
@@ -516,7 +515,7 @@ impl Accel {
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(ray.t_max),
-                |leaf, shifted_max| {
+                |_, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                     if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
                         blocked = true;
@@ -570,14 +569,13 @@ impl Accel {
         let mut blocked = false;
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
-        self.traverse::<false>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(ray.t_max), |leaf, shifted_max| {
+        self.traverse::<false>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(ray.t_max), |index, leaf, shifted_max| {
             let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
             let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
             let mut m = found.mask;
             while m != 0 {
                 let lane = m.trailing_zeros() as usize;
                 m &= m - 1;
-                let i = leaf.first as usize + lane;
                 let blocks = leaf.blocks & (1 << lane) != 0;
                 if blocks || n == MAX_SHADOW_HITS {
                     overflow = !blocks;
@@ -585,7 +583,7 @@ impl Accel {
                     return None;
                 }
                 let (b1, b2) = found.barycentrics(lane);
-                hits[n] = ShadowHit { t: found.t[lane], tri: i as u32, b1, b2 };
+                hits[n] = ShadowHit { t: found.t[lane], tri: index * 4 + lane as u32, b1, b2 };
                 n += 1;
             }
             Some(shifted_max)
@@ -599,7 +597,7 @@ impl Accel {
 
     /// The surface interaction of a hit from [`Self::shadow_hits`].
     pub fn shadow_interaction(&self, shapes: &[Shape], h: &ShadowHit) -> SurfaceInteraction {
-        self.triangle_interaction(shapes, h.tri as usize, h.t, h.b1, h.b2)
+        self.triangle_interaction(shapes, h.tri / 4, (h.tri % 4) as usize, h.t, h.b1, h.b2)
     }
 }
 
