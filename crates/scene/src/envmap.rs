@@ -121,6 +121,11 @@ impl EnvMap {
     pub fn eval(&self, d: Vec3) -> Rgb {
         let (u, v, _) = self.uv(d);
         let (x, y) = self.texel(u, v);
+        self.bilinear(x, y)
+    }
+
+    /// The bilinear lookup at texel coordinates `(x, y)` ([`Self::texel`]).
+    fn bilinear(&self, x: f32, y: f32) -> Rgb {
         let (i, j) = self.cell(x, y);
         let (fx, fy) = (x - i as f32, y - j as f32);
         let px = |i: usize, j: usize| self.pixels[j * self.width + i % self.width];
@@ -181,7 +186,13 @@ impl EnvMap {
         let cells = (self.width * (self.height - 1)) as f64;
         let pdf_uv = self.cell_weight(i, j) / total * cells;
         let pdf = (pdf_uv / (2.0 * (PI as f64).powi(2) * sin_t as f64)) as f32;
-        (pdf > 0.0).then(|| EnvMapSample { d, radiance: self.eval(d), pdf })
+        // The radiance at the sampled texel point itself: `eval(d)` would map `d` back to it
+        // through `atan2` and `acos` (the same point up to rounding).
+        (pdf > 0.0).then(|| EnvMapSample {
+            d,
+            radiance: self.bilinear(x.rem_euclid(self.width as f32), y),
+            pdf,
+        })
     }
 }
 

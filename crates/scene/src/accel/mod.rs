@@ -405,20 +405,26 @@ impl Accel {
             // The closest hit so far, kept here in the real parametrisation; obvhs only sees
             // the shifted distances, for pruning.
             let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
-            self.traverse::<true>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(t_max), |index, leaf, shifted_max| {
-                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
-                Some(match hits.closest() {
-                    Some(lane) => {
-                        let t = hits.t[lane];
-                        t_max = t;
-                        let (b1, b2) = hits.barycentrics(lane);
-                        closest = Some((index, lane, t, b1, b2));
-                        shifted(t)
-                    }
-                    None => shifted_max,
-                })
-            });
+            self.traverse::<true>(
+                bvh,
+                o - d * ORIGIN_BACKOFF,
+                d,
+                shifted(t_max),
+                |index, leaf, shifted_max| {
+                    let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                    let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
+                    Some(match hits.closest() {
+                        Some(lane) => {
+                            let t = hits.t[lane];
+                            t_max = t;
+                            let (b1, b2) = hits.barycentrics(lane);
+                            closest = Some((index, lane, t, b1, b2));
+                            shifted(t)
+                        }
+                        None => shifted_max,
+                    })
+                },
+            );
             if let Some((leaf, lane, t, b1, b2)) = closest {
                 best = Some(self.triangle_interaction(shapes, leaf, lane, t, b1, b2));
             }
@@ -569,25 +575,31 @@ impl Accel {
         let mut blocked = false;
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
-        self.traverse::<false>(bvh, o - d * ORIGIN_BACKOFF, d, shifted(ray.t_max), |index, leaf, shifted_max| {
-            let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-            let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
-            let mut m = found.mask;
-            while m != 0 {
-                let lane = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let blocks = leaf.blocks & (1 << lane) != 0;
-                if blocks || n == MAX_SHADOW_HITS {
-                    overflow = !blocks;
-                    blocked = true;
-                    return None;
+        self.traverse::<false>(
+            bvh,
+            o - d * ORIGIN_BACKOFF,
+            d,
+            shifted(ray.t_max),
+            |index, leaf, shifted_max| {
+                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
+                let mut m = found.mask;
+                while m != 0 {
+                    let lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let blocks = leaf.blocks & (1 << lane) != 0;
+                    if blocks || n == MAX_SHADOW_HITS {
+                        overflow = !blocks;
+                        blocked = true;
+                        return None;
+                    }
+                    let (b1, b2) = found.barycentrics(lane);
+                    hits[n] = ShadowHit { t: found.t[lane], tri: index * 4 + lane as u32, b1, b2 };
+                    n += 1;
                 }
-                let (b1, b2) = found.barycentrics(lane);
-                hits[n] = ShadowHit { t: found.t[lane], tri: index * 4 + lane as u32, b1, b2 };
-                n += 1;
-            }
-            Some(shifted_max)
-        });
+                Some(shifted_max)
+            },
+        );
         match (blocked, overflow) {
             (false, _) => ShadowQuery::Clear(n),
             (true, false) => ShadowQuery::Blocked,
