@@ -296,9 +296,9 @@ impl Accel {
     /// The nearest hit child of a node is visited first, the others kept on a stack with their
     /// entry distance and skipped when popped beyond the current `t_max` (after Embree, Wald et
     /// al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing", section 4.2, which
-    /// sorts all hit children). obvhs's `traverse!` instead visits children in an order fixed per ray octant
-    /// and cannot prune a pushed group by distance, so a closest-hit ray tested boxes and leaves
-    /// behind its hit (docs/performance.md, "Front-to-back traversal").
+    /// sorts all hit children). obvhs's `traverse!` instead visits children in an order fixed
+    /// per ray octant and cannot prune a pushed group by distance, so a closest-hit ray tested
+    /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal").
     #[inline(always)]
     fn traverse<const ORDERED: bool>(
         &self,
@@ -308,14 +308,17 @@ impl Accel {
         t_max: f32,
         test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
-        if wide.stack_need <= STACK {
-            let mut stack = [Entry::default(); STACK];
-            self.traverse_with::<ORDERED>(wide, o, d, t_max, &mut stack[..], test);
+        let mut small = [Entry::default(); STACK];
+        let mut large = Vec::new();
+        let stack: &mut [Entry] = if wide.stack_need <= STACK {
+            &mut small
         } else {
             // A degenerate tree (deeper than any scene measured needs): a stack of its size.
-            let n = wide.stack_need.min(wide.nodes.len() * 8 + 1);
-            self.traverse_with::<ORDERED>(wide, o, d, t_max, &mut vec![Entry::default(); n][..], test);
-        }
+            large.resize(wide.stack_need.min(wide.nodes.len() * 8 + 1), Entry::default());
+            &mut large
+        };
+        // One call site, so that `test` is inlined into the loop.
+        self.traverse_with::<ORDERED>(wide, o, d, t_max, stack, test);
     }
 
     #[inline(always)]
