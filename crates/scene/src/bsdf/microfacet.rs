@@ -162,6 +162,8 @@ impl Microfacet {
                 let fit = 1.0 + theta_i * (-0.876 + theta_i * (0.4265 - 0.0594 * theta_i));
                 let mut b = c - (1.0 + c) * (1.0 - x).powf(fit);
                 let norm = 1.0 / (1.0 + c + inv_sqrt_pi * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
+                // The slope `erfinv(b)` of the converged step, kept (one `erfinv` fewer).
+                let mut slope = None;
                 for _ in 0..9 {
                     if !(b >= a && b <= c) {
                         b = 0.5 * (a + c);
@@ -170,6 +172,7 @@ impl Microfacet {
                     let value = norm * (1.0 + b + inv_sqrt_pi * tan_theta_i * (-inv * inv).exp()) - x;
                     let derivative = norm * (1.0 - inv * tan_theta_i);
                     if value.abs() < 1e-5 {
+                        slope = Some(inv);
                         break;
                     }
                     if value > 0.0 {
@@ -180,7 +183,7 @@ impl Microfacet {
                     b -= value / derivative;
                 }
                 let y = (2.0 * u.y - 1.0).clamp(-1.0 + 1e-7, 1.0 - 1e-7);
-                Vec2::new(erfinv(b), erfinv(y))
+                Vec2::new(slope.unwrap_or_else(|| erfinv(b)), erfinv(y))
             }
             MicrofacetType::Ggx => {
                 // Project a disk sample onto the visible half of the hemisphere (Heitz 2017,
