@@ -3,11 +3,11 @@
 //! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
 //! have few of them).
 //!
-//! obvhs builds the tree; traversal is obvhs's `traverse!` loop (its stack, child order and
-//! leaf encoding) with two parts of ours, which made the BVH queries of the Mitsuba peer scenes
-//! ~20-30% cheaper (docs/performance.md, "Traversal of the peer scenes"): the node test reads
-//! child boxes decoded to f32 once ([`wide`]), and each leaf's 1-3 triangles are tested at once
-//! in SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
+//! obvhs builds the tree; traversal is ours (docs/performance.md, "Traversal of the peer
+//! scenes" and "Front-to-back traversal"): the node test reads child boxes decoded to f32 once
+//! ([`wide`]), the loop ([`Accel::traverse`]) visits the nearest hit child first and prunes
+//! pushed children by their entry distance, and each leaf's 1-3 triangles are tested at once in
+//! SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
 //!
 //! A watertight triangle test is not enough for a watertight traversal (issue 16, "the leak":
 //! paths escaped closed cube rooms). Two things in the BVH lost hits, and both are handled here
@@ -18,12 +18,13 @@
 //!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
 //!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions). The
 //!   decoded boxes are obvhs's quantised ones, which enclose these padded boxes.
-//! - obvhs clamps the entry distance of every box to `1e-4` (`cwbvh::node::EPSILON`; the ray's
-//!   `tmin` is not used), so a box the ray leaves before `t = 1e-4` is skipped: a wall just in
-//!   front of a point in a medium, or the adjacent wall at a corner. The traversal ray therefore
-//!   starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from the real
-//!   origin) report their distances in that shifted parametrisation. (Our node test starts
-//!   boxes at `t = 0` of that ray, so it is doubly covered.)
+//! - obvhs's node test clamps the entry distance of every box to `1e-4`
+//!   (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
+//!   just in front of a point in a medium, or the adjacent wall at a corner. The traversal ray
+//!   therefore starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from
+//!   the real origin) report their distances in that shifted parametrisation. Our node test
+//!   ([`wide::WideNode::intersect`]) starts boxes at `t = 0` of that ray; the back-off is kept
+//!   as a second guard.
 //!
 //! Coordinates whose magnitude obvhs's quantised node boxes cannot represent are refused when
 //! the scene is built ([`MAX_COORDINATE`]).
@@ -635,11 +636,13 @@ mod tests {
     fn bvh_matches_brute_force() {
         // A deep tree and a tree of a few leaves.
         for (count, scale) in [(2000, 10.0), (30, 2.0)] {
-            bvh_matches_brute_force_with(count, scale);
+            bvh_matches_brute_force_with(count, scale, false);
         }
+        // The stack for trees deeper than the fixed one holds.
+        bvh_matches_brute_force_with(2000, 10.0, true);
     }
 
-    fn bvh_matches_brute_force_with(count: usize, scale: f32) {
+    fn bvh_matches_brute_force_with(count: usize, scale: f32, deep_stack: bool) {
         let mut s = Sampler::from_seed(1);
         let mut tris = Vec::new();
         for _ in 0..count {
@@ -650,7 +653,10 @@ mod tests {
         let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
         let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
         let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
-        let accel = Accel::build(&shapes);
+        let mut accel = Accel::build(&shapes);
+        if deep_stack {
+            accel.bvh.as_mut().unwrap().stack_need = usize::MAX;
+        }
         for _ in 0..2000 {
             let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * scale;
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());

@@ -1,13 +1,14 @@
-//! obvhs's compressed 8-wide nodes with their child boxes decoded to f32, for a cheaper node test.
+//! obvhs's compressed 8-wide nodes with their child boxes decoded to f32, for a cheaper node test,
+//! and each child slot resolved to the inner node or leaf it holds, for our traversal loop
+//! (`Accel::traverse` in `mod.rs`).
 //!
 //! A `CwBvhNode` stores each child box as 8-bit offsets on a per-node power-of-two grid (Ylitie,
 //! Karras and Laine 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
 //! BVHs", section 3.1). obvhs converts those 48 bytes to floats on every node test, which was
 //! about a third of all traversal time on the Mitsuba peer scenes (docs/performance.md,
-//! "Traversal of the peer scenes"). [`WideNode`] keeps the same tree, child order and
-//! metadata, with the boxes decoded once at build time, so obvhs's `traverse!` loop (its stack,
-//! octant child order and leaf encoding) runs unchanged over [`WideBvh::nodes`]; only the node
-//! test is ours.
+//! "Traversal of the peer scenes"). [`WideNode`] keeps the same tree with the boxes decoded
+//! once at build time; instead of obvhs's child metadata (octant-permuted inner children, leaf
+//! primitive runs) each slot holds the index of its node or leaf directly.
 //!
 //! The decoded boxes are the quantised ones (which obvhs rounds outwards, so they enclose the
 //! exact child boxes) up to one rounding of `p + 2^e q`, far below the pad every triangle's box
