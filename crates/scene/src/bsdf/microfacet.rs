@@ -204,6 +204,8 @@ impl Microfacet {
 /// Error function, as `1 - erfc` with the Chebyshev fit of `erfc` from Numerical Recipes
 /// (`erfcc`: relative error of `erfc` below 1.2e-7 everywhere), evaluated in f32 like Mitsuba's
 /// `erf` (absolute error ~1e-7, which is the resolution of the f32 CDF values it is used for).
+// The published coefficients, as printed; the compiler rounds them to f32.
+#[allow(clippy::excessive_precision)]
 pub(crate) fn erf(x: f32) -> f32 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
@@ -219,6 +221,8 @@ pub(crate) fn erf(x: f32) -> f32 {
 
 /// Inverse error function on (-1, 1): Giles' (2010) single-precision approximation (relative
 /// error below 4e-7).
+// The published coefficients, as printed; the compiler rounds them to f32.
+#[allow(clippy::excessive_precision)]
 pub(crate) fn erfinv(y: f32) -> f32 {
     let w = -((1.0 - y) * (1.0 + y)).ln();
     if w < 5.0 {
