@@ -4,7 +4,7 @@
 //! have few of them).
 //!
 //! obvhs builds the tree; traversal is ours (docs/performance.md, "Traversal of the peer
-//! scenes" and "Front-to-back traversal"): the node test reads child boxes decoded to f32 once
+//! scenes" and "Front-to-back traversal and per-query costs"): the node test reads child boxes decoded to f32 once
 //! ([`wide`]), the loop ([`Accel::traverse`]) visits the nearest hit child first and prunes
 //! pushed children by their entry distance, and each leaf's 1-3 triangles are tested at once in
 //! SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
@@ -132,7 +132,7 @@ const STACK: usize = 64;
 const T_MIN: f32 = 0.0;
 
 /// A distance `t` from the real origin as a distance along the traversal ray, rounded up so
-/// that obvhs never prunes a box that holds a hit at `t`.
+/// that the traversal never prunes a box that holds a hit at `t`.
 fn shifted(t: f32) -> f32 {
     (t + ORIGIN_BACKOFF) * (1.0 + 4.0 * f32::EPSILON)
 }
@@ -306,7 +306,8 @@ impl Accel {
     /// al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing", section 4.2, which
     /// sorts all hit children). obvhs's `traverse!` instead visits children in an order fixed
     /// per ray octant and cannot prune a pushed group by distance, so a closest-hit ray tested
-    /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal").
+    /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal and per-query
+    /// costs").
     #[inline(always)]
     fn traverse<const ORDERED: bool>(
         &self,
@@ -416,8 +417,8 @@ impl Accel {
             // Prepared on the first triangle test: most connection and shadow rays in media
             // test no triangle at all, only node boxes.
             let mut wt: Option<WatertightRay> = None;
-            // The closest hit so far, kept here in the real parametrisation; obvhs only sees
-            // the shifted distances, for pruning.
+            // The closest hit so far, kept here in the real parametrisation; the traversal only
+            // sees the shifted distances, for pruning.
             let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
             self.traverse::<true>(
                 bvh,
