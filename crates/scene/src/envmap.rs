@@ -35,6 +35,71 @@ pub struct EnvMap {
     marginal: Vec<f64>,
     /// Per cell row, the cumulative weights of its `width` cells (`width + 1` entries each).
     conditional: Vec<f64>,
+    /// What [`Self::sample`] draws from: the rows by weight, and per row its cells by weight,
+    /// as alias tables (one table entry read per choice instead of a binary search through
+    /// the cumulative weights, a cache miss per step on large maps). The same probabilities,
+    /// so the same pdf; only the map from random numbers to cells differs.
+    rows: Alias,
+    cells: Vec<Alias>,
+}
+
+/// Walker's alias table (Vose's construction, "A linear algorithm for generating random
+/// numbers with a given distribution", IEEE TSE 1991): slot `k` keeps itself with probability
+/// `q[k]`, else goes to `alias[k]`.
+#[derive(Clone, Debug, PartialEq)]
+struct Alias {
+    slots: Vec<AliasSlot>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct AliasSlot {
+    /// f32, so that a slot is 8 bytes (the tables of a 512x256 map then take 1 MB, half as
+    /// much cache); an error of an ulp in `q` moves ~1e-7 of a slot's probability.
+    q: f32,
+    alias: u32,
+}
+
+impl Alias {
+    /// From non-negative weights; all-zero weights give the uniform table (never drawn from:
+    /// a zero-weight row is never chosen).
+    fn new(w: &[f64]) -> Self {
+        let n = w.len();
+        let sum: f64 = w.iter().sum();
+        let mut slots: Vec<AliasSlot> = (0..n).map(|k| AliasSlot { q: 1.0, alias: k as u32 }).collect();
+        if sum <= 0.0 {
+            return Alias { slots };
+        }
+        let mut p: Vec<f64> = w.iter().map(|&x| x * n as f64 / sum).collect();
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&k| p[k] < 1.0);
+        while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+            small.pop();
+            slots[s] = AliasSlot { q: p[s] as f32, alias: l as u32 };
+            p[l] -= 1.0 - p[s];
+            if p[l] < 1.0 {
+                large.pop();
+                small.push(l);
+            }
+        }
+        // What is left has probability 1 up to rounding.
+        for k in small.into_iter().chain(large) {
+            slots[k] = AliasSlot { q: 1.0, alias: k as u32 };
+        }
+        Alias { slots }
+    }
+
+    /// The slot `u` in `[0, 1)` picks, and a fresh uniform position in `[0, 1)` from what is
+    /// left of `u`.
+    #[inline]
+    fn sample(&self, u: f64) -> (usize, f64) {
+        let n = self.slots.len();
+        let s = u * n as f64;
+        let k = (s as usize).min(n - 1);
+        let f = s - k as f64;
+        let slot = self.slots[k];
+        let q = slot.q as f64;
+        let (k, f) = if f < q { (k, f / q) } else { (slot.alias as usize, (f - q) / (1.0 - q)) };
+        (k, f.clamp(0.0, 1.0 - 1e-7))
+    }
 }
 
 /// A direction sampled from an [`EnvMap`].
@@ -65,19 +130,35 @@ impl EnvMap {
         let lum = |x: usize, y: usize| pixels[y * width + x % width].luminance().max(0.0) as f64;
         let mut conditional = Vec::with_capacity(rows * (width + 1));
         let mut marginal = Vec::with_capacity(rows + 1);
+        let mut cells = Vec::with_capacity(rows);
         marginal.push(0.0);
         for j in 0..rows {
             let sin_theta = (PI as f64 * (j as f64 + 0.5) / rows as f64).sin();
             let mut acc = 0.0;
             conditional.push(0.0);
-            for i in 0..width {
-                let w = 0.25 * (lum(i, j) + lum(i + 1, j) + lum(i, j + 1) + lum(i + 1, j + 1)) * sin_theta;
+            let weights: Vec<f64> = (0..width)
+                .map(|i| 0.25 * (lum(i, j) + lum(i + 1, j) + lum(i, j + 1) + lum(i + 1, j + 1)) * sin_theta)
+                .collect();
+            for w in &weights {
                 acc += w;
                 conditional.push(acc);
             }
+            cells.push(Alias::new(&weights));
             marginal.push(marginal[j] + acc);
         }
-        Ok(EnvMap { width, height, pixels, to_world, to_local: to_world.inverse(), marginal, conditional })
+        let row_weights: Vec<f64> = marginal.windows(2).map(|m| m[1] - m[0]).collect();
+        let rows = Alias::new(&row_weights);
+        Ok(EnvMap {
+            width,
+            height,
+            pixels,
+            to_world,
+            to_local: to_world.inverse(),
+            marginal,
+            conditional,
+            rows,
+            cells,
+        })
     }
 
     /// Reads an OpenEXR (`.exr`) or Radiance HDR (`.hdr`, `.rgbe`) latitude-longitude image.
@@ -121,6 +202,11 @@ impl EnvMap {
     pub fn eval(&self, d: Vec3) -> Rgb {
         let (u, v, _) = self.uv(d);
         let (x, y) = self.texel(u, v);
+        self.bilinear(x, y)
+    }
+
+    /// The bilinear lookup at texel coordinates `(x, y)` ([`Self::texel`]).
+    fn bilinear(&self, x: f32, y: f32) -> Rgb {
         let (i, j) = self.cell(x, y);
         let (fx, fy) = (x - i as f32, y - j as f32);
         let px = |i: usize, j: usize| self.pixels[j * self.width + i % self.width];
@@ -140,15 +226,23 @@ impl EnvMap {
 
     /// Solid-angle pdf with which [`Self::sample`] returns the unit world direction `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
-        let total = self.total();
-        if total <= 0.0 {
-            return 0.0;
-        }
+        self.eval_pdf(d).1
+    }
+
+    /// [`Self::eval`] and [`Self::pdf`] of `d` at once (an escaping ray needs both), mapping
+    /// `d` to the image (`atan2`, `acos`) once.
+    pub fn eval_pdf(&self, d: Vec3) -> (Rgb, f32) {
         let (u, v, sin_theta) = self.uv(d);
-        if sin_theta <= 0.0 {
+        let (x, y) = self.texel(u, v);
+        (self.bilinear(x, y), self.texel_pdf(x, y, sin_theta))
+    }
+
+    /// The solid-angle pdf at texel coordinates `(x, y)` of a direction with `sin(theta)`.
+    fn texel_pdf(&self, x: f32, y: f32, sin_theta: f32) -> f32 {
+        let total = self.total();
+        if total <= 0.0 || sin_theta <= 0.0 {
             return 0.0;
         }
-        let (x, y) = self.texel(u, v);
         let (i, j) = self.cell(x, y);
         let cells = (self.width * (self.height - 1)) as f64;
         let pdf_uv = self.cell_weight(i, j) / total * cells;
@@ -162,9 +256,8 @@ impl EnvMap {
         if total <= 0.0 {
             return None;
         }
-        let (j, fy) = sample_cdf(&self.marginal, u.y as f64 * total);
-        let row = &self.conditional[j * (self.width + 1)..(j + 1) * (self.width + 1)];
-        let (i, fx) = sample_cdf(row, u.x as f64 * row[self.width]);
+        let (j, fy) = self.rows.sample(u.y as f64);
+        let (i, fx) = self.cells[j].sample(u.x as f64);
         let x = i as f32 + fx as f32;
         let y = j as f32 + fy as f32;
         // Back from texel to (u, v): pixel i sits at u = (i + 1/2) / W.
@@ -181,18 +274,14 @@ impl EnvMap {
         let cells = (self.width * (self.height - 1)) as f64;
         let pdf_uv = self.cell_weight(i, j) / total * cells;
         let pdf = (pdf_uv / (2.0 * (PI as f64).powi(2) * sin_t as f64)) as f32;
-        (pdf > 0.0).then(|| EnvMapSample { d, radiance: self.eval(d), pdf })
+        // The radiance at the sampled texel point itself: `eval(d)` would map `d` back to it
+        // through `atan2` and `acos` (the same point up to rounding).
+        (pdf > 0.0).then(|| EnvMapSample {
+            d,
+            radiance: self.bilinear(x.rem_euclid(self.width as f32), y),
+            pdf,
+        })
     }
-}
-
-/// Finds the interval `k` of the cumulative table `cdf` (`cdf[0] = 0`, increasing) holding
-/// `target`, skipping empty intervals, and the position inside it in `[0, 1)`.
-fn sample_cdf(cdf: &[f64], target: f64) -> (usize, f64) {
-    let n = cdf.len() - 1;
-    let k = cdf.partition_point(|&c| c <= target).clamp(1, n) - 1;
-    let width = cdf[k + 1] - cdf[k];
-    let f = if width > 0.0 { ((target - cdf[k]) / width).clamp(0.0, 1.0 - 1e-7) } else { 0.5 };
-    (k, f)
 }
 
 fn read_exr(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
@@ -300,6 +389,28 @@ mod tests {
         quad *= 4.0 * PI / (2 * n * n) as f32;
         for c in 0..3 {
             assert!((est.0[c] / quad.0[c] - 1.0).abs() < 0.01, "{est} vs {quad}");
+        }
+    }
+
+    /// Each slot's probability in the alias table (kept, plus aliased to) is its weight's
+    /// share; zero weights are never drawn.
+    #[test]
+    fn alias_table_probabilities() {
+        let w = [0.0, 3.0, 1.0, 0.0, 0.5, 7.25, 2.0];
+        let table = Alias::new(&w);
+        let n = w.len() as f64;
+        let sum: f64 = w.iter().sum();
+        let mut p = vec![0.0; w.len()];
+        for (k, s) in table.slots.iter().enumerate() {
+            p[k] += s.q as f64 / n;
+            p[s.alias as usize] += (1.0 - s.q as f64) / n;
+        }
+        for k in 0..w.len() {
+            assert!((p[k] - w[k] / sum).abs() < 1e-7, "slot {k}: {} vs {}", p[k], w[k] / sum);
+        }
+        for i in 0..1000 {
+            let (k, f) = table.sample(i as f64 / 1000.0);
+            assert!(w[k] > 0.0 && (0.0..1.0).contains(&f), "{k} {f}");
         }
     }
 

@@ -143,7 +143,10 @@ impl Scene {
         let sel = 1.0 / self.emitters.len().max(1) as f32;
         self.emitters.iter().filter_map(move |e| match e {
             Emitter::Constant { radiance } => Some((*radiance, sel * uniform_sphere_pdf())),
-            Emitter::EnvMap(map) => Some((map.eval(d), sel * map.pdf(d))),
+            Emitter::EnvMap(map) => {
+                let (le, pdf) = map.eval_pdf(d);
+                Some((le, sel * pdf))
+            }
             _ => None,
         })
     }

@@ -3,11 +3,11 @@
 //! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
 //! have few of them).
 //!
-//! obvhs builds the tree; traversal is obvhs's `traverse!` loop (its stack, child order and
-//! leaf encoding) with two parts of ours, which made the BVH queries of the Mitsuba peer scenes
-//! ~20-30% cheaper (docs/performance.md, "Traversal of the peer scenes"): the node test reads
-//! child boxes decoded to f32 once ([`wide`]), and each leaf's 1-3 triangles are tested at once
-//! in SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
+//! obvhs builds the tree; traversal is ours (docs/performance.md, "Traversal of the peer
+//! scenes" and "Front-to-back traversal and per-query costs"): the node test reads child boxes decoded to f32 once
+//! ([`wide`]), the loop ([`Accel::traverse`]) visits the nearest hit child first and prunes
+//! pushed children by their entry distance, and each leaf's 1-3 triangles are tested at once in
+//! SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
 //!
 //! A watertight triangle test is not enough for a watertight traversal (issue 16, "the leak":
 //! paths escaped closed cube rooms). Two things in the BVH lost hits, and both are handled here
@@ -18,12 +18,13 @@
 //!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
 //!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions). The
 //!   decoded boxes are obvhs's quantised ones, which enclose these padded boxes.
-//! - obvhs clamps the entry distance of every box to `1e-4` (`cwbvh::node::EPSILON`; the ray's
-//!   `tmin` is not used), so a box the ray leaves before `t = 1e-4` is skipped: a wall just in
-//!   front of a point in a medium, or the adjacent wall at a corner. The traversal ray therefore
-//!   starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from the real
-//!   origin) report their distances in that shifted parametrisation. (Our node test starts
-//!   boxes at `t = 0` of that ray, so it is doubly covered.)
+//! - obvhs's node test clamps the entry distance of every box to `1e-4`
+//!   (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
+//!   just in front of a point in a medium, or the adjacent wall at a corner. The traversal ray
+//!   therefore starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from
+//!   the real origin) report their distances in that shifted parametrisation. Our node test
+//!   ([`wide::WideNode::intersect`]) starts boxes at `t = 0` of that ray; the back-off is kept
+//!   as a second guard.
 //!
 //! Coordinates whose magnitude obvhs's quantised node boxes cannot represent are refused when
 //! the scene is built ([`MAX_COORDINATE`]).
@@ -32,16 +33,16 @@ mod watertight;
 mod wide;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
-use wide::{leaf_children, WideBvh, WideRay};
+use wide::{leaf_children, WideBvh, WideRay, LEAF};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
 use crate::shape::{Geometry, Shape};
-use glam::{Mat4, UVec2, Vec2, Vec3, Vec3A};
+use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::{builder::build_cwbvh, CwBvh, Traversal};
-use obvhs::ray::Ray as BvhRay;
+use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
+use obvhs::ray::safe_inverse;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
@@ -68,13 +69,15 @@ struct TriRef {
     v: TriSoa,
     shape: u32,
     prim: u32,
+    /// The unit face normal, flipped as the mesh says (`TriangleMesh::face_normal`).
+    n: Vec3,
     /// The shape stops shadow rays (neither `null` nor a thin dielectric, see
     /// [`Accel::shadow_hits`]).
     blocks: bool,
 }
 
-/// Where a triangle in BVH leaf order came from.
-#[derive(Clone, Copy, Debug)]
+/// Where a triangle of a leaf came from.
+#[derive(Clone, Copy, Debug, Default)]
 struct TriId {
     shape: u32,
     prim: u32,
@@ -84,6 +87,7 @@ struct TriId {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShadowHit {
     pub t: f32,
+    /// The leaf's index times 4 plus the triangle's lane in it.
     tri: u32,
     b1: f32,
     b2: f32,
@@ -110,13 +114,25 @@ enum Analytic {
     Disk { shape: u32, to_world: Mat4, inv: Mat4, normal: Vec3 },
 }
 
+/// A pushed child of the traversal: a node or [`LEAF`]-tagged leaf, and where the ray enters
+/// its box.
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    node: u32,
+    t: f32,
+}
+
+/// Entries of the traversal's fixed stack; trees that may need more get one of their size
+/// ([`WideBvh::stack_need`]).
+const STACK: usize = 64;
+
 /// Triangle hits closer than this to the ray origin are ignored. Rays leaving a surface start
 /// at an offset origin (`haze_core::ray::offset_origin`), so this only has to exclude hits at
 /// the origin itself.
 const T_MIN: f32 = 0.0;
 
 /// A distance `t` from the real origin as a distance along the traversal ray, rounded up so
-/// that obvhs never prunes a box that holds a hit at `t`.
+/// that the traversal never prunes a box that holds a hit at `t`.
 fn shifted(t: f32) -> f32 {
     (t + ORIGIN_BACKOFF) * (1.0 + 4.0 * f32::EPSILON)
 }
@@ -142,12 +158,16 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
     }
 }
 
-/// A BVH leaf: its triangles transposed for [`WatertightRay::intersect_packet`], and the index
-/// (in leaf order, into `Accel::tris`) of the first.
+/// A BVH leaf: its triangles transposed for [`WatertightRay::intersect_packet`] and where each
+/// came from. The hit's shape and primitive are read from here, not from an array indexed by
+/// triangle: the leaf is in cache after its test, another array is a cache miss per hit.
 #[derive(Clone, Copy, Debug)]
 struct Leaf {
     packet: TriPacket,
-    first: u32,
+    ids: [TriId; 4],
+    /// Each triangle's [`TriRef::n`], computed once at build: normalising it per hit (a square
+    /// root and a division in the chain that ends the query) was a few percent of hg-box.
+    normals: [Vec3; 4],
     /// Bit `i` set when triangle `i` stops shadow rays ([`TriRef::blocks`]).
     blocks: u32,
 }
@@ -155,12 +175,8 @@ struct Leaf {
 pub struct Accel {
     /// The tree obvhs built, its nodes decoded ([`wide`]): what traversal reads.
     bvh: Option<WideBvh>,
-    /// Shape and primitive of each triangle in leaf order (the vertices are in `leaves`).
-    tris: Vec<TriId>,
     /// Every BVH leaf's triangles as one packet (obvhs puts at most 3 in a leaf).
     leaves: Vec<Leaf>,
-    /// For each triangle in leaf order, the index in `leaves` of its leaf.
-    leaf_of: Vec<u32>,
     analytic: Vec<Analytic>,
     lo: Vec3,
     hi: Vec3,
@@ -178,12 +194,11 @@ fn build_params(triangles: usize) -> BvhBuildParams {
 }
 
 /// One [`Leaf`] per leaf child of every node of `bvh`, in node order and by primitive offset
-/// within a node (the order [`wide::WideNode::leaf`] counts in); for each node the index of its
-/// first leaf; for each triangle (in leaf order, as in `tris`) the index of its leaf.
-fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>, Vec<u32>) {
+/// within a node (the order [`wide::WideBvh::new`] numbers a node's leaves in), and for each node
+/// the index of its first leaf.
+fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>) {
     let mut leaves = Vec::new();
     let mut leaf_base = Vec::with_capacity(bvh.nodes.len());
-    let mut leaf_of = vec![u32::MAX; tris.len()];
     for node in &bvh.nodes {
         leaf_base.push(leaves.len() as u32);
         let mut children: Vec<(u32, u32)> = leaf_children(node).collect();
@@ -193,12 +208,14 @@ fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>, Vec<u32>)
             let run = &tris[first..first + count as usize];
             let soa: Vec<TriSoa> = run.iter().map(|t| t.v).collect();
             let blocks = run.iter().enumerate().fold(0, |m, (lane, t)| m | u32::from(t.blocks) << lane);
-            leaf_of[first..first + count as usize].fill(leaves.len() as u32);
-            leaves.push(Leaf { packet: TriPacket::new(&soa), first: first as u32, blocks });
+            let ids = std::array::from_fn(|lane| {
+                run.get(lane).map_or(TriId::default(), |t| TriId { shape: t.shape, prim: t.prim })
+            });
+            let normals = std::array::from_fn(|lane| run.get(lane).map_or(Vec3::ZERO, |t| t.n));
+            leaves.push(Leaf { packet: TriPacket::new(&soa), ids, normals, blocks });
         }
     }
-    debug_assert!(leaf_of.iter().all(|&l| l != u32::MAX), "a triangle in no leaf");
-    (leaves, leaf_base, leaf_of)
+    (leaves, leaf_base)
 }
 
 impl Accel {
@@ -221,6 +238,7 @@ impl Accel {
                             v: TriSoa::new(a.into(), b.into(), c.into()),
                             shape: si as u32,
                             prim: i as u32,
+                            n: m.face_normal(i),
                             blocks: s.blocks_shadow_rays(),
                         });
                     }
@@ -253,8 +271,8 @@ impl Accel {
                 }
             }
         }
-        let (bvh, tris, leaves, leaf_of) = if flat.is_empty() {
-            (None, Vec::new(), Vec::new(), Vec::new())
+        let (bvh, leaves) = if flat.is_empty() {
+            (None, Vec::new())
         } else {
             let magnitude = flat
                 .iter()
@@ -270,40 +288,119 @@ impl Accel {
                 .collect();
             let bvh = build_cwbvh(&boxes, build_params(flat.len()), &mut Default::default());
             let tris: Vec<TriRef> = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
-            let (leaves, leaf_base, leaf_of) = leaf_packets(&bvh, &tris);
+            let (leaves, leaf_base) = leaf_packets(&bvh, &tris);
             let wide = WideBvh::new(&bvh, &leaf_base);
-            let tris = tris.iter().map(|t| TriId { shape: t.shape, prim: t.prim }).collect();
-            (Some(wide), tris, leaves, leaf_of)
+            (Some(wide), leaves)
         };
-        Accel { bvh, tris, leaves, leaf_of, analytic, lo, hi }
+        Accel { bvh, leaves, analytic, lo, hi }
     }
 
-    /// obvhs's `traverse!` loop over the decoded nodes for the traversal ray `r` (the backed-off
-    /// origin, see the module documentation). `test(leaf, t_max)` tests the triangles of a leaf
-    /// the ray reaches and returns the new `t_max` in the traversal's parametrisation (below the
-    /// old one for a closer hit: nodes beyond it are pruned), or `None` to end the traversal.
+    /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
+    /// (the backed-off origin, see the module documentation) up to `t_max`. `test(leaf, t_max)`
+    /// tests the triangles of a leaf the ray reaches and returns the new `t_max` in the
+    /// traversal's parametrisation (below the old one for a closer hit), or `None` to end the
+    /// traversal.
+    ///
+    /// The nearest hit child of a node is visited first, the others kept on a stack with their
+    /// entry distance and skipped when popped beyond the current `t_max` (after Embree, Wald et
+    /// al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing", section 4.2, which
+    /// sorts all hit children). obvhs's `traverse!` instead visits children in an order fixed
+    /// per ray octant and cannot prune a pushed group by distance, so a closest-hit ray tested
+    /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal and per-query
+    /// costs").
     #[inline(always)]
-    fn traverse(&self, wide: &WideBvh, r: &BvhRay, mut test: impl FnMut(&Leaf, f32) -> Option<f32>) {
-        let ray = WideRay::new(r.origin, r.direction, r.inv_direction, 0.0);
-        let mut t_max = r.tmax;
-        // `CwBvh::new_traversal` for a tree with nodes (`WideBvh` always has a root).
-        let mut state = Traversal::default();
-        state.reinit(r.direction);
-        let mut node = &wide.nodes[0];
-        'outer: {
-            obvhs::traverse!(wide, node, state, node.intersect(&ray, t_max, state.oct_inv4), {
-                // A hit leaf child sets its whole run of primitive bits and obvhs hands out the
-                // highest bit first, so this is the last triangle of its leaf: test the leaf
-                // and clear the rest of its run.
-                let local = state.primitive_id - state.primitive_group.x;
-                let leaf = &self.leaves[node.leaf(local) as usize];
-                let run = state.primitive_id - leaf.first;
-                state.primitive_group.y &= !(((1u32 << run) - 1) << (local - run));
-                match test(leaf, t_max) {
+    fn traverse<const ORDERED: bool>(
+        &self,
+        wide: &WideBvh,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
+        test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
+    ) {
+        let mut small = [Entry::default(); STACK];
+        let mut large = Vec::new();
+        let stack: &mut [Entry] = if wide.stack_need <= STACK {
+            &mut small
+        } else {
+            // A degenerate tree (deeper than any scene measured needs): a stack of its size.
+            large.resize(wide.stack_need.min(wide.nodes.len() * 8 + 1), Entry::default());
+            &mut large
+        };
+        // One call site, so that `test` is inlined into the loop.
+        self.traverse_with::<ORDERED>(wide, o, d, t_max, stack, test);
+    }
+
+    #[inline(always)]
+    fn traverse_with<const ORDERED: bool>(
+        &self,
+        wide: &WideBvh,
+        o: Vec3A,
+        d: Vec3A,
+        mut t_max: f32,
+        stack: &mut [Entry],
+        mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
+    ) {
+        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+        let ray = WideRay::new(o, d, inv, 0.0);
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                let leaf = cur & !LEAF;
+                match test(leaf, &self.leaves[leaf as usize], t_max) {
                     Some(t) => t_max = t,
-                    None => break 'outer,
+                    None => return,
                 }
-            });
+            } else {
+                let node = &wide.nodes[cur as usize];
+                let (mut mask, [lo0, lo1]) = node.intersect(&ray, t_max);
+                if mask != 0 {
+                    let c = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.children[c];
+                        continue;
+                    }
+                    // Two or more hit children: onto the stack, the nearest swapped to the top
+                    // and taken next. The others are popped in any order but each still
+                    // pruned by its entry distance (a full insertion sort cost more in branch
+                    // mispredictions than it saved in visits, measured).
+                    let t_near: [f32; 8] = {
+                        let (a, b) = (lo0.to_array(), lo1.to_array());
+                        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+                    };
+                    let mut best = sp;
+                    let mut best_t = t_near[c];
+                    stack[sp] = Entry { node: node.children[c], t: best_t };
+                    sp += 1;
+                    while mask != 0 {
+                        let c = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let t = t_near[c];
+                        stack[sp] = Entry { node: node.children[c], t };
+                        if ORDERED && t < best_t {
+                            best = sp;
+                            best_t = t;
+                        }
+                        sp += 1;
+                    }
+                    sp -= 1;
+                    cur = stack[best].node;
+                    stack[best] = stack[sp];
+                    continue;
+                }
+            }
+            // Next: the nearest pushed child still in front of the closest hit.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                if !ORDERED || stack[sp].t <= t_max {
+                    cur = stack[sp].node;
+                    break;
+                }
+            }
         }
     }
 
@@ -320,26 +417,31 @@ impl Accel {
             // Prepared on the first triangle test: most connection and shadow rays in media
             // test no triangle at all, only node boxes.
             let mut wt: Option<WatertightRay> = None;
-            // The closest hit so far, kept here in the real parametrisation; obvhs only sees
-            // the shifted distances, for pruning.
-            let mut closest: Option<(usize, f32, f32, f32)> = None;
-            let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(t_max));
-            self.traverse(bvh, &r, |leaf, shifted_max| {
-                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
-                Some(match hits.closest() {
-                    Some(lane) => {
-                        let t = hits.t[lane];
-                        t_max = t;
-                        let (b1, b2) = hits.barycentrics(lane);
-                        closest = Some((leaf.first as usize + lane, t, b1, b2));
-                        shifted(t)
-                    }
-                    None => shifted_max,
-                })
-            });
-            if let Some((i, t, b1, b2)) = closest {
-                best = Some(self.triangle_interaction(shapes, i, t, b1, b2));
+            // The closest hit so far, kept here in the real parametrisation; the traversal only
+            // sees the shifted distances, for pruning.
+            let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
+            self.traverse::<true>(
+                bvh,
+                o - d * ORIGIN_BACKOFF,
+                d,
+                shifted(t_max),
+                |index, leaf, shifted_max| {
+                    let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                    let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
+                    Some(match hits.closest() {
+                        Some(lane) => {
+                            let t = hits.t[lane];
+                            t_max = t;
+                            let (b1, b2) = hits.barycentrics(lane);
+                            closest = Some((index, lane, t, b1, b2));
+                            shifted(t)
+                        }
+                        None => shifted_max,
+                    })
+                },
+            );
+            if let Some((leaf, lane, t, b1, b2)) = closest {
+                best = Some(self.triangle_interaction(shapes, leaf, lane, t, b1, b2));
             }
         }
         for a in &self.analytic {
@@ -383,28 +485,28 @@ impl Accel {
     fn triangle_interaction(
         &self,
         shapes: &[Shape],
-        i: usize,
+        leaf: u32,
+        lane: usize,
         t: f32,
         b1: f32,
         b2: f32,
     ) -> SurfaceInteraction {
-        let tri = self.tris[i];
+        let leaf = &self.leaves[leaf as usize];
+        let tri = leaf.ids[lane];
         let Geometry::Mesh(m) = &shapes[tri.shape as usize].geometry else {
             unreachable!("triangles come from meshes")
         };
         let b0 = 1.0 - b1 - b2;
-        let leaf = &self.leaves[self.leaf_of[i] as usize];
-        let v = leaf.packet.triangle(i - leaf.first as usize);
+        let v = leaf.packet.triangle(lane);
         let [v0, v1, v2] = [0, 1, 2].map(|j| Vec3::from(v.vertex(j)));
         // Barycentric interpolation is more precise than o + t d far from the origin.
         let p = pull_inside(v0 * b0 + v1 * b1 + v2 * b2, [v0, v1, v2]);
-        // `TriangleMesh::face_normal` from the leaf's copy of the vertices (the same floats),
-        // not the mesh's index and position arrays: three fewer cache misses per hit.
-        let n = (v1 - v0).cross(v2 - v0).normalize_or_zero();
-        let n = if m.flip_normals { -n } else { n };
-        let idx = m.indices[tri.prim as usize].map(|i| i as usize);
+        let n = leaf.normals[lane];
+        // The vertex indices only for meshes with vertex normals or uvs (a cache miss).
+        let idx = || m.indices[tri.prim as usize].map(|i| i as usize);
         let ns = match &m.normals {
             Some(ns) => {
+                let idx = idx();
                 let s = (ns[idx[0]] * b0 + ns[idx[1]] * b1 + ns[idx[2]] * b2).normalize_or_zero();
                 let s = if m.flip_normals { -s } else { s };
                 if s == Vec3::ZERO {
@@ -416,7 +518,10 @@ impl Accel {
             None => n,
         };
         let uv = match &m.uvs {
-            Some(uv) => uv[idx[0]] * b0 + uv[idx[1]] * b1 + uv[idx[2]] * b2,
+            Some(uv) => {
+                let idx = idx();
+                uv[idx[0]] * b0 + uv[idx[1]] * b1 + uv[idx[2]] * b2
+            }
             None => Vec2::new(b1, b2),
         };
         SurfaceInteraction { t, p, n, ns, uv, shape: tri.shape, prim: tri.prim }
@@ -428,16 +533,21 @@ impl Accel {
             let d: Vec3A = ray.d.into();
             let mut wt: Option<WatertightRay> = None;
             let mut blocked = false;
-            let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
-            self.traverse(bvh, &r, |leaf, shifted_max| {
-                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
-                    blocked = true;
-                    None
-                } else {
-                    Some(shifted_max)
-                }
-            });
+            self.traverse::<false>(
+                bvh,
+                o - d * ORIGIN_BACKOFF,
+                d,
+                shifted(ray.t_max),
+                |_, leaf, shifted_max| {
+                    let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                    if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
+                        blocked = true;
+                        None
+                    } else {
+                        Some(shifted_max)
+                    }
+                },
+            );
             if blocked {
                 return true;
             }
@@ -482,27 +592,31 @@ impl Accel {
         let mut blocked = false;
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
-        let r = BvhRay::new(o - d * ORIGIN_BACKOFF, d, 0.0, shifted(ray.t_max));
-        self.traverse(bvh, &r, |leaf, shifted_max| {
-            let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-            let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
-            let mut m = found.mask;
-            while m != 0 {
-                let lane = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let i = leaf.first as usize + lane;
-                let blocks = leaf.blocks & (1 << lane) != 0;
-                if blocks || n == MAX_SHADOW_HITS {
-                    overflow = !blocks;
-                    blocked = true;
-                    return None;
+        self.traverse::<false>(
+            bvh,
+            o - d * ORIGIN_BACKOFF,
+            d,
+            shifted(ray.t_max),
+            |index, leaf, shifted_max| {
+                let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
+                let mut m = found.mask;
+                while m != 0 {
+                    let lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let blocks = leaf.blocks & (1 << lane) != 0;
+                    if blocks || n == MAX_SHADOW_HITS {
+                        overflow = !blocks;
+                        blocked = true;
+                        return None;
+                    }
+                    let (b1, b2) = found.barycentrics(lane);
+                    hits[n] = ShadowHit { t: found.t[lane], tri: index * 4 + lane as u32, b1, b2 };
+                    n += 1;
                 }
-                let (b1, b2) = found.barycentrics(lane);
-                hits[n] = ShadowHit { t: found.t[lane], tri: i as u32, b1, b2 };
-                n += 1;
-            }
-            Some(shifted_max)
-        });
+                Some(shifted_max)
+            },
+        );
         match (blocked, overflow) {
             (false, _) => ShadowQuery::Clear(n),
             (true, false) => ShadowQuery::Blocked,
@@ -512,7 +626,7 @@ impl Accel {
 
     /// The surface interaction of a hit from [`Self::shadow_hits`].
     pub fn shadow_interaction(&self, shapes: &[Shape], h: &ShadowHit) -> SurfaceInteraction {
-        self.triangle_interaction(shapes, h.tri as usize, h.t, h.b1, h.b2)
+        self.triangle_interaction(shapes, h.tri / 4, (h.tri % 4) as usize, h.t, h.b1, h.b2)
     }
 }
 
@@ -532,11 +646,13 @@ mod tests {
     fn bvh_matches_brute_force() {
         // A deep tree and a tree of a few leaves.
         for (count, scale) in [(2000, 10.0), (30, 2.0)] {
-            bvh_matches_brute_force_with(count, scale);
+            bvh_matches_brute_force_with(count, scale, false);
         }
+        // The stack for trees deeper than the fixed one holds.
+        bvh_matches_brute_force_with(2000, 10.0, true);
     }
 
-    fn bvh_matches_brute_force_with(count: usize, scale: f32) {
+    fn bvh_matches_brute_force_with(count: usize, scale: f32, deep_stack: bool) {
         let mut s = Sampler::from_seed(1);
         let mut tris = Vec::new();
         for _ in 0..count {
@@ -547,7 +663,10 @@ mod tests {
         let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
         let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
         let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
-        let accel = Accel::build(&shapes);
+        let mut accel = Accel::build(&shapes);
+        if deep_stack {
+            accel.bvh.as_mut().unwrap().stack_need = usize::MAX;
+        }
         for _ in 0..2000 {
             let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * scale;
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());

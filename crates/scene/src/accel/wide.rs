@@ -1,13 +1,14 @@
-//! obvhs's compressed 8-wide nodes with their child boxes decoded to f32, for a cheaper node test.
+//! obvhs's compressed 8-wide nodes with their child boxes decoded to f32, for a cheaper node test,
+//! and each child slot resolved to the inner node or leaf it holds, for our traversal loop
+//! (`Accel::traverse` in `mod.rs`).
 //!
 //! A `CwBvhNode` stores each child box as 8-bit offsets on a per-node power-of-two grid (Ylitie,
 //! Karras and Laine 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
 //! BVHs", section 3.1). obvhs converts those 48 bytes to floats on every node test, which was
 //! about a third of all traversal time on the Mitsuba peer scenes (docs/performance.md,
-//! "Traversal of the peer scenes"). [`WideNode`] keeps the same tree, child order and
-//! metadata, with the boxes decoded once at build time, so obvhs's `traverse!` loop (its stack,
-//! octant child order and leaf encoding) runs unchanged over [`WideBvh::nodes`]; only the node
-//! test is ours.
+//! "Traversal of the peer scenes"). [`WideNode`] keeps the same tree with the boxes decoded
+//! once at build time; instead of obvhs's child metadata (octant-permuted inner children, leaf
+//! primitive runs) each slot holds the index of its node or leaf directly.
 //!
 //! The decoded boxes are the quantised ones (which obvhs rounds outwards, so they enclose the
 //! exact child boxes) up to one rounding of `p + 2^e q`, far below the pad every triangle's box
@@ -19,25 +20,20 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 
+/// Tag of a [`WideNode::children`] entry that is a leaf (the rest is the leaf's index in the
+/// caller's leaf array); untagged entries are indices of inner nodes in [`WideBvh::nodes`].
+pub const LEAF: u32 = 1 << 31;
+
 /// One node: the 8 child boxes as `[min x, max x, min y, max y, min z, max z]`, each 8 lanes in
-/// two `Vec4`s, and obvhs's fields that `traverse!` and the hit mask read.
+/// two `Vec4`s, and what each child slot holds.
 #[derive(Clone, Copy, Debug)]
 pub struct WideNode {
     planes: [[Vec4; 2]; 6],
-    /// Read by obvhs's `traverse!` macro: index of the first child node.
-    pub child_base_idx: u32,
-    /// Read by obvhs's `traverse!` macro: index of the first primitive of the leaf children.
-    pub primitive_base_idx: u32,
-    /// Read by obvhs's `traverse!` macro: which children are inner nodes.
-    pub imask: u8,
-    /// Each leaf child's bits of the hit mask (its primitives' run in the low 24 bits, the same
-    /// for every ray octant); 0 for inner children and empty slots.
-    leaf_bits: [u32; 8],
-    /// Index (into the caller's leaf array) of this node's first leaf child, in primitive order.
-    pub leaf_base: u32,
-    /// Bit `i` set when a leaf child's primitives start at `primitive_base_idx + i`, so the
-    /// leaf holding local primitive `j` is `leaf_base + popcount(leaf_starts & (2^(j+1) - 1)) - 1`.
-    pub leaf_starts: u32,
+    /// Child slot `c`: an inner node's index in [`WideBvh::nodes`], or [`LEAF`] `|` the index of
+    /// a leaf in the caller's leaf array (anything for an empty slot, which `valid` masks out).
+    pub children: [u32; 8],
+    /// Bit `c` set when slot `c` holds a child.
+    valid: u32,
 }
 
 /// A ray prepared for [`WideNode::intersect`]: for each axis, which of the two planes is met
@@ -65,48 +61,42 @@ impl WideRay {
 }
 
 impl WideNode {
-    /// `boxes[c]`: the box of child `c` (anything for an empty slot: its child bits are zero, so
-    /// it never adds to the hit mask).
+    /// `boxes[c]`: the box of child `c` (anything for an empty slot); `leaf_base`: the index in
+    /// the caller's leaf array of this node's first leaf child, the node's leaf children being
+    /// numbered by their primitive offset.
     fn new(n: &CwBvhNode, boxes: &[Aabb; 8], leaf_base: u32) -> Self {
         let planes = std::array::from_fn(|i| {
             let a = i / 2;
             let lane = |c: usize| if i % 2 == 0 { boxes[c].min[a] } else { boxes[c].max[a] };
             [Vec4::new(lane(0), lane(1), lane(2), lane(3)), Vec4::new(lane(4), lane(5), lane(6), lane(7))]
         });
-        WideNode {
-            planes,
-            child_base_idx: n.child_base_idx,
-            primitive_base_idx: n.primitive_base_idx,
-            imask: n.imask,
-            leaf_bits: std::array::from_fn(|c| {
-                let meta = u32::from(n.child_meta[c]);
-                if n.imask & (1 << c) != 0 {
-                    // The octant trick of `intersect` relies on obvhs's encoding of inner children.
-                    assert_eq!(meta, 0b0010_0000 | (24 + c as u32), "obvhs changed its node encoding");
-                    0
-                } else {
-                    (meta >> 5) << (meta & 0b11111)
-                }
-            }),
-            leaf_base,
-            leaf_starts: leaf_children(n).fold(0, |m, (offset, _)| m | 1 << offset),
-        }
+        let leaf_starts: u32 = leaf_children(n).fold(0, |m, (offset, _)| m | 1 << offset);
+        let mut valid = 0;
+        let children = std::array::from_fn(|c| {
+            let meta = u32::from(n.child_meta[c]);
+            if n.imask & (1 << c) != 0 {
+                // obvhs (`traverse!`): inner children are stored from `child_base_idx` on, in
+                // slot order.
+                valid |= 1 << c;
+                n.child_base_idx + (u32::from(n.imask) & ((1 << c) - 1)).count_ones()
+            } else if meta != 0 {
+                valid |= 1 << c;
+                let offset = meta & 0b11111;
+                LEAF | (leaf_base + (leaf_starts & ((2u32 << offset) - 1)).count_ones() - 1)
+            } else {
+                0
+            }
+        });
+        WideNode { planes, children, valid }
     }
 
-    /// The leaf holding local primitive `j` (`primitive_id - primitive_base_idx`), as an index
-    /// into the caller's leaf array.
+    /// The slab test of all 8 children (Kay and Kajiya 1986) for `t` in `[ray.t_min, t_max]`:
+    /// bit `c` of the mask set when child `c` is hit, and each child's entry distance (lanes
+    /// 0-3 and 4-7), by which the traversal orders and prunes them.
     #[inline(always)]
-    pub fn leaf(&self, j: u32) -> u32 {
-        self.leaf_base + (self.leaf_starts & ((2u32 << j) - 1)).count_ones() - 1
-    }
-
-    /// The slab test of all 8 children (Kay and Kajiya 1986) for `t` in `[ray.t_min, t_max]`,
-    /// returned as obvhs's node hit mask (`CwBvhNode::intersect_ray`): inner children in the top
-    /// byte at their octant-ordered slot, leaf primitives as bits of the low 24.
-    #[inline(always)]
-    pub fn intersect(&self, ray: &WideRay, t_max: f32, oct_inv4: u32) -> u32 {
+    pub fn intersect(&self, ray: &WideRay, t_max: f32) -> (u32, [Vec4; 2]) {
         let t_max = Vec4::splat(t_max);
-        let half = |h: usize| -> BVec4A {
+        let half = |h: usize| -> (BVec4A, Vec4) {
             let mut lo = ray.t_min;
             let mut hi = t_max;
             for a in 0..3 {
@@ -116,35 +106,11 @@ impl WideNode {
                 lo = lo.max(t_near);
                 hi = hi.min(t_far);
             }
-            lo.cmple(hi)
+            (lo.cmple(hi), lo)
         };
-        let mask = half(0).bitmask() | half(1).bitmask() << 4;
-        if mask == 0 {
-            return 0;
-        }
-        // obvhs (`get_child_and_index_bits`) puts inner child `c`, stored with metadata
-        // `24 + c`, at bit `24 + (c ^ o)` for the ray octant `o`: permute the inner children's
-        // bits by that XOR, one swap per set bit of `o`.
-        let o = oct_inv4 & 7;
-        let mut inner = mask & u32::from(self.imask);
-        if o & 1 != 0 {
-            inner = ((inner & 0x55) << 1) | ((inner >> 1) & 0x55);
-        }
-        if o & 2 != 0 {
-            inner = ((inner & 0x33) << 2) | ((inner >> 2) & 0x33);
-        }
-        if o & 4 != 0 {
-            inner = ((inner & 0x0f) << 4) | ((inner >> 4) & 0x0f);
-        }
-        // Leaf children: their runs. (A branch-free loop over all 8 slots measured no faster on
-        // the peer scenes and slower on small ones, where few children are hit.)
-        let mut leaves = 0u32;
-        let mut hit_leaves = mask & !u32::from(self.imask);
-        while hit_leaves != 0 {
-            leaves |= self.leaf_bits[hit_leaves.trailing_zeros() as usize];
-            hit_leaves &= hit_leaves - 1;
-        }
-        inner << 24 | leaves
+        let (m0, lo0) = half(0);
+        let (m1, lo1) = half(1);
+        ((m0.bitmask() | m1.bitmask() << 4) & self.valid, [lo0, lo1])
     }
 }
 
@@ -162,20 +128,41 @@ pub fn leaf_children(n: &CwBvhNode) -> impl Iterator<Item = (u32, u32)> + '_ {
 /// The nodes of a [`CwBvh`], decoded; primitive indices stay the `CwBvh`'s.
 #[derive(Clone, Debug)]
 pub struct WideBvh {
-    /// Named `nodes` for obvhs's `traverse!` macro, which indexes `$cwbvh.nodes`.
     pub nodes: Vec<WideNode>,
+    /// Most entries a traversal's stack can hold at once (each node visited pushes its hit
+    /// children and pops one), or `usize::MAX` when the tree is not laid out parents first.
+    pub stack_need: usize,
 }
 
 impl WideBvh {
     /// `leaf_base[i]`: where node `i`'s leaf children start in the caller's leaf array, which
     /// holds every node's leaf children in node order, each node's by primitive offset.
     pub fn new(bvh: &CwBvh, leaf_base: &[u32]) -> Self {
-        let nodes = bvh.nodes.iter().zip(leaf_base);
-        WideBvh {
-            nodes: nodes
-                .map(|(n, &b)| WideNode::new(n, &std::array::from_fn(|c| n.child_aabb(c)), b))
-                .collect(),
+        let nodes: Vec<WideNode> = bvh
+            .nodes
+            .iter()
+            .zip(leaf_base)
+            .map(|(n, &b)| WideNode::new(n, &std::array::from_fn(|c| n.child_aabb(c)), b))
+            .collect();
+        // need(node) = (children - 1) + max over inner children of need(child), over the
+        // nodes in reverse order (obvhs stores children after their parent; checked).
+        let mut need = vec![0usize; nodes.len()];
+        let mut ordered = true;
+        for i in (0..nodes.len()).rev() {
+            let n = &nodes[i];
+            let slots = (0..8).filter(|c| n.valid & (1 << c) != 0);
+            let mut deepest = 0;
+            for c in slots.clone() {
+                let child = n.children[c];
+                if child & LEAF == 0 {
+                    ordered &= child as usize > i && (child as usize) < nodes.len();
+                    deepest = deepest.max(need.get(child as usize).copied().unwrap_or(0));
+                }
+            }
+            need[i] = slots.count().saturating_sub(1) + deepest;
         }
+        let stack_need = if ordered { need.first().map_or(0, |n| n + 1) } else { usize::MAX };
+        WideBvh { nodes, stack_need }
     }
 }
 
@@ -213,9 +200,20 @@ mod tests {
                 | ((d.z >= 0.0) as u32 * 0x01010101);
             let wr = WideRay::new(o, d, r.inv_direction, 1e-4);
             for (n, w) in bvh.nodes.iter().zip(&wide.nodes) {
-                let (a, b) = (w.intersect(&wr, t_max, oct), n.intersect_ray(&r, oct));
-                hits += b.count_ones();
-                differ += (a ^ b).count_ones();
+                let theirs = n.intersect_ray(&r, oct);
+                let ours = w.intersect(&wr, t_max).0;
+                // obvhs's mask: inner child `c` at bit `24 + (c ^ octant)`, a leaf child as
+                // its run of primitive bits.
+                for c in 0..8 {
+                    let meta = u32::from(n.child_meta[c]);
+                    let hit = if n.imask & (1 << c) != 0 {
+                        theirs >> (24 + (c as u32 ^ (oct & 7))) & 1 != 0
+                    } else {
+                        theirs & ((meta >> 5) << (meta & 0b11111)) != 0
+                    };
+                    hits += u32::from(hit);
+                    differ += u32::from(hit != (ours >> c & 1 != 0));
+                }
             }
         }
         assert!(hits > 20_000, "{hits}");
