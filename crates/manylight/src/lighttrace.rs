@@ -307,21 +307,10 @@ fn trace_one(
                         // `weight` holds `sigma_s(x)` over the hero's pdf (T29).
                         t *= weight;
                         r *= ratio;
-                        let p = ray.at(dist);
-                        out.vpls.push(VplRecord {
-                            p,
-                            d_in: ray.d,
-                            flux: power * t / r.mean(),
-                            medium: m,
-                            after_surface,
-                        });
-                        events += 1;
-                        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings)
-                        {
+                        let at = Vertex { m, after_surface, power, phase: &med.phase };
+                        if !scatter(&at, ray.at(dist), &mut ray, &mut t, r, &mut events, s, settings, out) {
                             return;
                         }
-                        let (d, _) = med.phase.sample(ray.d, s.next_2d());
-                        ray = Ray::new(p, d);
                         continue;
                     }
                     Flight::Pass { weight, ratio } => {
@@ -350,21 +339,10 @@ fn trace_one(
                     FreeFlight::Interaction { t: dist, weight, ratio } => {
                         t *= weight * med.sigma_s();
                         r *= ratio;
-                        let p = ray.at(dist);
-                        out.vpls.push(VplRecord {
-                            p,
-                            d_in: ray.d,
-                            flux: power * t / r.mean(),
-                            medium: m,
-                            after_surface,
-                        });
-                        events += 1;
-                        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings)
-                        {
+                        let at = Vertex { m, after_surface, power, phase: &med.phase };
+                        if !scatter(&at, ray.at(dist), &mut ray, &mut t, r, &mut events, s, settings, out) {
                             return;
                         }
-                        let (d, _) = med.phase.sample(ray.d, s.next_2d());
-                        ray = Ray::new(p, d);
                         continue;
                     }
                     FreeFlight::Pass { weight, ratio } => {
@@ -409,6 +387,45 @@ fn trace_one(
         }
         ray = Ray::new(offset_origin(h.p, h.n, d), d);
     }
+}
+
+/// What a medium scattering vertex of a light path needs besides the path's state.
+struct Vertex<'a> {
+    m: MediumId,
+    after_surface: bool,
+    power: Rgb,
+    phase: &'a haze_core::Phase,
+}
+
+/// A medium scattering vertex at `p` (throughput `t` with `sigma_s` already in, pdf ratios `r`):
+/// its VPL, the event count and Russian roulette, then the phase-sampled ray on. False if the
+/// path ends there.
+#[allow(clippy::too_many_arguments)]
+fn scatter(
+    at: &Vertex,
+    p: Vec3,
+    ray: &mut Ray,
+    t: &mut Rgb,
+    r: Rgb,
+    events: &mut u32,
+    s: &mut Sampler,
+    settings: &LightTraceSettings,
+    out: &mut LightSet,
+) -> bool {
+    out.vpls.push(VplRecord {
+        p,
+        d_in: ray.d,
+        flux: at.power * *t / r.mean(),
+        medium: at.m,
+        after_surface: at.after_surface,
+    });
+    *events += 1;
+    if *events >= settings.max_events || !survives_roulette(s, t, r, *events, settings) {
+        return false;
+    }
+    let (d, _) = at.phase.sample(ray.d, s.next_2d());
+    *ray = Ray::new(p, d);
+    true
 }
 
 /// Russian roulette on the relative throughput `t / mean(r)` once `events > rr_events`.
