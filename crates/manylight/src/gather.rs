@@ -374,15 +374,13 @@ fn walk_chain(
             if let (Some(a), Some(b)) = lobes {
                 if a.pdf < 1.0 && b.pdf < 1.0 && (a.transmitted != b.transmitted || a.null != b.null) {
                     let branch = |bs: &BsdfSample| {
+                        let p = bs.pdf * factor;
                         let mut next = after_delta(st, &h, &frame, bs, scene);
                         next.may_split = None;
-                        (next, bs.pdf * factor)
+                        next.beta *= p;
+                        (next, p)
                     };
-                    let split = [branch(&a), branch(&b)];
-                    return ChainEnd::Split(split.map(|(mut w, p)| {
-                        w.beta *= p;
-                        (w, p)
-                    }));
+                    return ChainEnd::Split([branch(&a), branch(&b)]);
                 }
             }
         }

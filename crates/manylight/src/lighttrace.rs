@@ -449,7 +449,7 @@ fn survives_roulette(
 
 /// Diagonal of the scene's geometry (1 if there is none): caps the length of a VRL in an
 /// unbounded medium, where a segment escaping to infinity would otherwise be infinitely long.
-fn scene_extent(scene: &Scene) -> f32 {
+pub(crate) fn scene_extent(scene: &Scene) -> f32 {
     let (lo, hi) = scene.bounds();
     let d = (hi - lo).length();
     if d.is_finite() && d > 0.0 {

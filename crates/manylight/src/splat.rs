@@ -93,11 +93,6 @@ impl CameraSplats {
         }
         self
     }
-
-    /// Number of pixels that received light (for tests and statistics).
-    pub fn lit_pixels(&self) -> usize {
-        self.pixels.iter().filter(|c| !c.is_black()).count()
-    }
 }
 
 /// A delta shape's bounding sphere.
@@ -116,6 +111,8 @@ pub struct CausticTracer {
     cdf: Vec<f32>,
     paths: u64,
     max_events: u32,
+    /// Longest beam (four scene diagonals): a beam escaping into an unbounded medium.
+    max_len: f32,
 }
 
 /// Separates the caustic paths' random numbers from every other stream of the same seed.
@@ -139,7 +136,7 @@ impl CausticTracer {
             .emitters
             .iter()
             .enumerate()
-            .filter_map(|(k, e)| emitter_weight(scene, e, &targets).map(|w| (k as u32, w)))
+            .filter_map(|(k, e)| emitter_weight(scene, k as u32, e, &targets).map(|w| (k as u32, w)))
             .collect();
         if weights.is_empty() {
             return None;
@@ -157,12 +154,14 @@ impl CausticTracer {
                 acc
             })
             .collect();
-        Some(CausticTracer { targets, emitters: weights, cdf, paths, max_events: max_events.max(1) })
-    }
-
-    /// Caustic paths per pass.
-    pub fn paths(&self) -> u64 {
-        self.paths
+        Some(CausticTracer {
+            targets,
+            emitters: weights,
+            cdf,
+            paths,
+            max_events: max_events.max(1),
+            max_len: 4.0 * crate::lighttrace::scene_extent(scene),
+        })
     }
 
     /// The splats of one pass's caustic paths (path `i` draws from
@@ -282,15 +281,8 @@ impl CausticTracer {
         let (mut ray, mut medium) = crate::lighttrace::emission_ray(scene, &e);
         let mut beta = e.weight * inv_paths;
         let mut through_delta = false;
-        let max_len = {
-            let (lo, hi) = scene.bounds();
-            let d = (hi - lo).length();
-            if d.is_finite() && d > 0.0 {
-                4.0 * d
-            } else {
-                4.0
-            }
-        };
+        // As light tracing caps its VRLs in an unbounded medium.
+        let max_len = self.max_len;
         let mut events = 0;
         for _ in 0..10_000 {
             let hit = scene.intersect(&ray);
@@ -380,9 +372,9 @@ fn bounding_sphere(g: &Geometry) -> Option<Target> {
     }
 }
 
-/// A rough measure of the power emitter `e` sends towards the targets (for `P_k`), or `None`
-/// if it cannot start a caustic path (environments).
-fn emitter_weight(scene: &Scene, e: &Emitter, targets: &[Target]) -> Option<f32> {
+/// A rough measure of the power emitter `e` (index `k`) sends towards the targets (for `P_k`),
+/// or `None` if it cannot start a caustic path (environments).
+fn emitter_weight(scene: &Scene, k: u32, e: &Emitter, targets: &[Target]) -> Option<f32> {
     let omega = |p: Vec3| -> f32 {
         targets
             .iter()
@@ -403,7 +395,7 @@ fn emitter_weight(scene: &Scene, e: &Emitter, targets: &[Target]) -> Option<f32>
         }
         Emitter::Area { shape, radiance } => {
             let sh = &scene.shapes[*shape as usize];
-            let area = haze_scene::shape::AreaSampler::new(sh).area;
+            let area = scene.area_sampler(k)?.area;
             let c = bounding_sphere(&sh.geometry).map_or(Vec3::ZERO, |t| t.c);
             Some(radiance.mean() * area * omega(c) / PI)
         }
