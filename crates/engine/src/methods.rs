@@ -60,17 +60,6 @@ impl Method {
         };
         // Name the method in a refusal (e.g. an environment emitter): "integrator 'vrl': ...".
         let named = |e: haze_scene::lights::EmissionError| anyhow!("integrator '{kind}': {e}");
-        // The bound cut needs a lower bound of every connection's transmittance (docs/theory.md
-        // §7.1), which haze has only for homogeneous media (docs/theory.md §12.5).
-        if MethodKind::LIGHTCUTS.contains(&kind) && options.lightcuts.strategy == CutStrategy::Bound {
-            if let Some(m) = scene.media.iter().find(|m| !m.is_homogeneous()) {
-                bail!(
-                    "integrator '{kind}': option cut = bound needs a lower bound of transmittance, which \
-                     the heterogeneous medium '{}' does not give; use cut = stochastic (the default)",
-                    m.name
-                );
-            }
-        }
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {

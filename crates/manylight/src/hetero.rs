@@ -97,6 +97,21 @@ pub(crate) fn connect(scene: &Scene, from: MediumId, y: Vec3, x: Vec3, s: &mut S
 /// majorant's distance (T34) on a heterogeneous segment.
 const GEOMETRIC_SHARE: f64 = 0.5;
 
+/// The bound cut's factor of medium `id` (`m` its entry of the pass's media table), per channel:
+/// `sigma_s f_max` of (T15) for a homogeneous medium; for a heterogeneous one the largest
+/// `sigma_s(x) f_max` (the global majorant times the albedo volume's maximum, both bounds, T28)
+/// divided by the geometric share `a` of the mixture (T35) ((T36)), since the mixture's weights stay
+/// within `1/a` of the geometric ones (`docs/theory.md` §12.5, "The bound cut"). Ratio-tracking
+/// estimates of transmittance (T30) never exceed 1 under a true majorant, so (T15)'s
+/// `T_c <= 1` and the VRL's `Phi(0)` still bound them.
+pub(crate) fn bound_factor(scene: &Scene, m: &VrlMedium, id: MediumId) -> Rgb {
+    let medium = scene.medium(id);
+    match medium.hetero {
+        None => m.sigma_s * m.phase.max_value(),
+        Some(_) => medium.sigma_t * medium.albedo * medium.phase.max_value() * (1.0 / GEOMETRIC_SHARE as f32),
+    }
+}
+
 /// The majorant's distance distribution along `seg` in `h`, if it has one.
 #[inline]
 fn majorant_distance<'a>(h: Option<&'a Heterogeneous>, seg: &Segment) -> Option<MajorantDistance<'a>> {

@@ -169,14 +169,6 @@ fn min_distance(seg: &Segment, b: &Aabb, t0: f32, t1: f32) -> f32 {
     best.sqrt() as f32
 }
 
-/// The camera-side and light-side factors of a scene, for [`BoundContext`].
-pub fn light_factor(media: &[crate::vrl::VrlMedium]) -> Rgb {
-    media.iter().fold(Rgb::ZERO, |acc, m| {
-        let f = m.sigma_s * m.phase.max_value();
-        Rgb(std::array::from_fn(|c| acc[c].max(f[c])))
-    })
-}
-
 /// Clusters with at most this many lights are bounded with the distances to their lights
 /// themselves rather than to their box (our refinement of the paper's bound: a box around a
 /// few VRLs often touches the camera segment although none of the VRLs comes close to it).
@@ -388,7 +380,7 @@ impl BoundContext {
 }
 
 /// Calls `f` with the light index of every leaf below `node`.
-fn for_each_light(tree: &super::LightTree, node: &Node, mut f: impl FnMut(u32)) {
+pub(crate) fn for_each_light(tree: &super::LightTree, node: &Node, mut f: impl FnMut(u32)) {
     let mut stack = [0u32; 64];
     let mut top = 0;
     if node.is_leaf() {

@@ -10,6 +10,8 @@
 //! (`gather.rs`, the whole image); surface VPLs and gathering surface points are served by
 //! power sampling (`surface.rs`), not by the trees.
 
+#[cfg(test)]
+mod bound_tests;
 mod kinds;
 pub mod probe;
 mod surface;
@@ -24,7 +26,7 @@ use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint};
 use crate::lighttrace::trace_light_paths;
 use crate::splat::{CameraSplats, CausticTracer};
-use crate::tree::bound::{light_factor, BoundContext, BoundKind, ThetaBound};
+use crate::tree::bound::{BoundContext, BoundKind, ThetaBound};
 use crate::tree::build::{build_agglomerative, build_median_split, BuildSettings};
 use crate::tree::cone::{DirCone, LineCone};
 use crate::tree::cut::{lightcut, ClusterOracle, CutScratch, CutSettings, CutStats};
@@ -132,6 +134,8 @@ pub struct Forest<K: ClusterKind> {
 pub struct LightcutPass<K: ClusterKind> {
     forests: [Forest<K>; 2],
     media: Vec<VrlMedium>,
+    /// Per medium, the bound cut's `sigma_s f_max` factor (`crate::hetero::bound_factor`).
+    bound_factors: Vec<Rgb>,
     light_factor: Rgb,
     sigma_t_min: Rgb,
     /// The phase every medium shares, if one (for the tight bound's light-side phase).
@@ -287,7 +291,8 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
                 .shapes
                 .iter()
                 .any(|s| s.is_medium_transition() && (s.interior.is_none() || s.exterior.is_none()));
-        let sigma_t_min = if vacuum {
+        // A heterogeneous medium's extinction may be 0 anywhere in its box (and is outside it).
+        let sigma_t_min = if vacuum || crate::hetero::any(scene) {
             Rgb::ZERO
         } else {
             media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| {
@@ -295,8 +300,12 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
             })
         };
         let light_phase = media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p));
+        let bound_factors: Vec<Rgb> = (0..media.len())
+            .map(|id| crate::hetero::bound_factor(scene, &media[id], id as MediumId))
+            .collect();
         LightcutPass {
-            light_factor: light_factor(&media),
+            light_factor: bound_factors.iter().fold(Rgb::ZERO, |a, f| a.max(*f)),
+            bound_factors,
             forests,
             media,
             sigma_t_min,
@@ -409,6 +418,21 @@ impl<K: ClusterKind> Integrator for CutSizeProbe<'_, K> {
 }
 
 impl<K: ClusterKind> LightcutsIntegrator<K> {
+    /// What the bound cut bounds the contributions to camera segment `cs` with (`docs/theory.md`
+    /// §7, and §12.5 for heterogeneous media).
+    fn bound_context(&self, pass: &LightcutPass<K>, cs: &CameraSegment) -> BoundContext {
+        BoundContext {
+            seg: cs.seg,
+            camera_factor: pass.bound_factors[cs.medium as usize],
+            light_factor: pass.light_factor,
+            sigma_t_min: pass.sigma_t_min,
+            kind: self.settings.bound,
+            theta: self.settings.theta,
+            camera_phase: pass.media[cs.medium as usize].phase,
+            light_phase: pass.light_phase,
+        }
+    }
+
     /// The cut of tree `group` for the camera segment `cs` (`gather::Gather::segment`'s per-group
     /// sum, estimated through the tree).
     fn segment_cut(
@@ -481,16 +505,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                 (sum, CutStats { size, hit_max: false })
             }),
             CutStrategy::Bound => CUT_SCRATCH.with_borrow_mut(|scratch| {
-                let bound = BoundContext {
-                    seg: cs.seg,
-                    camera_factor: cam_medium.sigma_s * cam_medium.phase.max_value(),
-                    light_factor: pass.light_factor,
-                    sigma_t_min: pass.sigma_t_min,
-                    kind: self.settings.bound,
-                    theta: self.settings.theta,
-                    camera_phase: cam_medium.phase,
-                    light_phase: pass.light_phase,
-                };
+                let bound = self.bound_context(pass, cs);
                 let mut o = Oracle { scene, forest, cs, media: &pass.media, bound, key };
                 lightcut(&forest.tree, &mut o, &self.settings.cut, scratch)
             }),
