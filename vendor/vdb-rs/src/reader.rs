@@ -50,9 +50,60 @@ pub enum ParseError {
     InvalidGridName(String),
     #[error("IoError")]
     IoError(#[from] std::io::Error),
+    // haze: lengths read from the file are checked before anything is allocated (PATCHES.md).
+    #[error("{what} of {len} bytes at byte {pos}, but the file has only {left} bytes after it")]
+    PastEnd {
+        what: &'static str,
+        len: u64,
+        pos: u64,
+        left: u64,
+    },
+    // haze: a length that the node's value count rules out (PATCHES.md).
+    #[error("{what}: {found} bytes, expected {expected}")]
+    BadLength {
+        what: &'static str,
+        found: u64,
+        expected: u64,
+    },
+}
+
+// haze: a length `len` read from the file, checked against the bytes left in the reader before
+// it is allocated: a corrupt length must be an error, not an allocation that aborts (PATCHES.md).
+fn check_len<R: Read + Seek>(
+    reader: &mut R,
+    what: &'static str,
+    len: u64,
+) -> Result<usize, ParseError> {
+    let pos = reader.stream_position()?;
+    let end = reader.seek(SeekFrom::End(0))?;
+    reader.seek(SeekFrom::Start(pos))?;
+    let left = end.saturating_sub(pos);
+    if len > left {
+        return Err(ParseError::PastEnd {
+            what,
+            len,
+            pos,
+            left,
+        });
+    }
+    Ok(len as usize)
+}
+
+// haze: a length read from the file that must be `expected` bytes (OpenVDB's bloscFromStream and
+// unzipFromStream in io/Compression.cc check the same) (PATCHES.md).
+fn expect_len(what: &'static str, found: u64, expected: usize) -> Result<(), ParseError> {
+    if found != expected as u64 {
+        return Err(ParseError::BadLength {
+            what,
+            found,
+            expected: expected as u64,
+        });
+    }
+    Ok(())
 }
 
 fn read_string<R: Read + Seek>(reader: &mut R, len: usize) -> Result<String, ParseError> {
+    check_len(reader, "a string", len as u64)?; // haze
     let mut string = String::with_capacity(len);
     for _ in 0..len {
         let c = reader.read_u8()? as char;
@@ -234,15 +285,27 @@ impl<R: Read + Seek> VdbReader<R> {
             let compressed_count = num_compressed_bytes / std::mem::size_of::<T>() as i64;
 
             trace!("Reading blosc data, {} bytes", num_compressed_bytes);
+            let expected = count * std::mem::size_of::<T>(); // haze
             if num_compressed_bytes <= 0 {
+                // haze: stored uncompressed, exactly the values' bytes.
+                expect_len(
+                    "an uncompressed block's size",
+                    num_compressed_bytes.unsigned_abs(),
+                    expected,
+                )?;
                 let mut data = vec![T::zeroed(); (-compressed_count) as usize];
                 reader.read_exact(cast_slice_mut(&mut data))?;
                 assert_eq!(-compressed_count as usize, count);
                 data
             } else {
+                check_len(reader, "a blosc block", num_compressed_bytes as u64)?; // haze
                 let mut blosc_data = vec![0u8; num_compressed_bytes as usize];
                 reader.read_exact(&mut blosc_data)?;
                 if count > 0 {
+                    // haze: blosc reads a 16-byte header from the block and trusts its sizes.
+                    if blosc_data.len() < 16 {
+                        return Err(ParseError::InvalidBloscData);
+                    }
                     let mut nbytes: usize = 0;
                     let mut cbytes: usize = 0;
                     let mut blocksize: usize = 0;
@@ -257,6 +320,10 @@ impl<R: Read + Seek> VdbReader<R> {
                     if nbytes == 0 {
                         return Err(ParseError::UnsupportedBloscFormat);
                     }
+                    // haze: blosc must not read past the block, and it must hold the values.
+                    let len = blosc_data.len();
+                    expect_len("a blosc block's compressed size", cbytes as u64, len)?;
+                    expect_len("a blosc block's decompressed size", nbytes as u64, expected)?;
                     let dest_size = nbytes / std::mem::size_of::<T>();
                     let mut dest: Vec<T> = vec![Zeroable::zeroed(); dest_size];
                     let error = unsafe {
@@ -267,7 +334,8 @@ impl<R: Read + Seek> VdbReader<R> {
                             1,
                         )
                     };
-                    if error < 1 {
+                    if error < 1 || error as usize != nbytes {
+                        // haze: `!= nbytes`: a short decompression is corrupt data too.
                         return Err(ParseError::InvalidBloscData);
                     }
                     dest
@@ -285,10 +353,18 @@ impl<R: Read + Seek> VdbReader<R> {
 
             trace!("Reading zipped data, {} bytes", num_zipped_bytes);
             if num_zipped_bytes <= 0 {
+                // haze: stored uncompressed, exactly the values' bytes.
+                let expected = count * std::mem::size_of::<T>();
+                expect_len(
+                    "an uncompressed block's size",
+                    num_zipped_bytes.unsigned_abs(),
+                    expected,
+                )?;
                 let mut data = vec![T::zeroed(); (-compressed_count) as usize];
                 reader.read_exact(cast_slice_mut(&mut data))?;
                 data
             } else {
+                check_len(reader, "a zip block", num_zipped_bytes as u64)?; // haze
                 let mut zipped_data = vec![0u8; num_zipped_bytes as usize];
                 reader.read_exact(&mut zipped_data)?;
 
@@ -351,15 +427,20 @@ impl<R: Read + Seek> VdbReader<R> {
             num_values
         };
 
+        // haze: a grid is saved as half floats when its type name ends in `_HalfFloat`: the rule
+        // OpenVDB reads by (GridDescriptor::read, File::createGrid); its writer sets the
+        // `is_saved_as_half_float` metadata vdb-rs looked at with it.
+        let half = gd.grid_type.ends_with("_HalfFloat");
+
         // jb-todo: we may need to extend this to vector types
-        let data = if gd.meta_data.is_half_float()
-            && std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>()
-        {
+        let data = if half && count == 0 {
+            // haze: OpenVDB writes nothing for an empty array of half values, not even the
+            // block's length (HalfWriter/HalfReader in io/Compression.h: `if (count < 1) return;`).
+            Vec::new()
+        } else if half && std::any::TypeId::of::<T>() == std::any::TypeId::of::<f32>() {
             let data = Self::read_compressed_data::<f16>(reader, archive, gd, count)?;
             bytemuck::cast_vec(data.into_iter().map(f16::to_f32).collect::<Vec<f32>>())
-        } else if !gd.meta_data.is_half_float()
-            && std::any::TypeId::of::<T>() == std::any::TypeId::of::<f16>()
-        {
+        } else if !half && std::any::TypeId::of::<T>() == std::any::TypeId::of::<f16>() {
             let data = Self::read_compressed_data::<f32>(reader, archive, gd, count)?;
             bytemuck::cast_vec(data.into_iter().map(f16::from_f32).collect::<Vec<_>>())
         } else {
@@ -426,6 +507,7 @@ impl<R: Read + Seek> VdbReader<R> {
                     }
                     "vec3i" => MetadataValue::Vec3i(read_i_vec3(reader)?),
                     name => {
+                        check_len(reader, "a metadata value", len as u64)?; // haze
                         let mut data = vec![0u8; len as usize];
                         reader.read_exact(&mut data)?;
 
@@ -573,12 +655,13 @@ impl<R: Read + Seek> VdbReader<R> {
         reader: &mut R,
         gd: GridDescriptor,
     ) -> Result<Grid<ValueTy>, ParseError> {
-        gd.seek_to_grid(reader).unwrap();
+        // haze: `?` for `.unwrap()` (three times): errors, not panics.
+        gd.seek_to_grid(reader)?;
         // Having to re-do this is ugly, as we already did this while parsing the descriptor
         if header.file_version >= OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION {
-            let _: Compression = reader.read_u32::<LittleEndian>()?.try_into().unwrap();
+            let _: Compression = reader.read_u32::<LittleEndian>()?.try_into()?;
         }
-        let _ = Self::read_metadata(reader).unwrap();
+        let _ = Self::read_metadata(reader)?;
 
         if header.file_version >= OPENVDB_FILE_VERSION_GRID_INSTANCING {
             let transform = Self::read_transform(reader)?;
