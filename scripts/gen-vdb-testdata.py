@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Writes tests/data/vdb/: one small float grid as an OpenVDB `.vdb` file and as a Mitsuba 3 `.vol`
-file describing the same medium, plus the bad `.vdb` files of the error tests (issue 15).
+file describing the same medium, the same grid saved as half floats, plus the bad `.vdb` files
+of the error tests (issue 15).
 
 The `.vdb` files are written by pyopenvdb (Debian's `python3-openvdb`, OpenVDB 10; run with
 /usr/bin/python3), an independent OpenVDB writer; the `.vol` file by the few lines of struct
@@ -113,9 +114,18 @@ def main():
     scaled = float_grid(a)
     scaled.transform = vdb.createLinearTransform([[0.25, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 0.125, 0], [1, 2, 3, 1]])
     vdb.write(os.path.join(out, "scaled.vdb"), grids=[scaled])
-    # Saved as half floats (which vdb-rs 0.6 misreads: an error).
+    # Saved as 16-bit half floats (a `Tree_float_5_4_3_HalfFloat` grid, Blender's and Houdini's
+    # default export), with a leaf whose voxels are all inactive background (set on, then off
+    # with the background 0: the leaf stays). OpenVDB stores no values and no length for such a
+    # leaf's empty array of half values, nor for the internal nodes without active tiles: the
+    # case vdb-rs 0.6.0 misread (vendor/vdb-rs/PATCHES.md). The leaf, voxels (-16..-9, 0..7,
+    # 0..7), comes before the grid's leaf (-8..-1, 0..7, 0..7) in the file.
     half = float_grid(a)
-    half["is_saved_as_half_float"] = True
+    half.saveFloatAsHalf = True
+    acc = half.getAccessor()
+    acc.setValueOn((-12, 3, 2), 1.0)
+    acc.setValueOff((-12, 3, 2), 0.0)
+    assert half.leafCount() == 3 and half.activeVoxelCount() == float_grid(a).activeVoxelCount()
     vdb.write(os.path.join(out, "half.vdb"), grids=[half])
     # A sparse grid too large to densify: two voxels 4000 apart (4003^3 cells with the padding).
     sparse = vdb.FloatGrid()

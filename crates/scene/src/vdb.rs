@@ -1,6 +1,7 @@
 //! OpenVDB `.vdb` float grids for `gridvolume` (haze's extension of Mitsuba 3; issue 15), read
-//! through the `vdb-rs` crate and densified into a [`Grid`], so the lookups, the bounding box and
-//! the majorant grid are those of a `.vol` grid.
+//! through the `vdb-rs` crate (0.6.0 with haze's patch, `vendor/vdb-rs/PATCHES.md`) and densified
+//! into a [`Grid`], so the lookups, the bounding box and the majorant grid are those of a `.vol`
+//! grid. Grids saved as 16-bit half floats are float grids like the others.
 //!
 //! How a VDB grid becomes a medium (what a Blender, Houdini or EmberGen user exporting smoke
 //! expects; `docs/openvdb.md` says it for users):
@@ -16,17 +17,21 @@
 //!   refused for `.vdb` files, as is `use_grid_bbox` (the file's transform places the grid).
 //!
 //! What `vdb-rs` 0.6 does not do, and how haze copes:
+//! - it allocated lengths read from the file before reading them (a corrupt length aborted the
+//!   process) and misread half-float grids: haze builds a patched copy, `vendor/vdb-rs`, which
+//!   checks every length against the bytes left and the node's size (errors
+//!   `ParseError::PastEnd`/`BadLength`, mapped in [`guarded`]) and reads half floats as
+//!   OpenVDB writes them; `crates/scene/tests/vdb_hostile.rs` fuzzes the reader with corrupt
+//!   files;
 //! - it panics on some inputs (a transform map it does not know, e.g. the `AffineMap` of a
 //!   rotated grid; multi-buffer trees; very old files) and mis-checks the magic number, so
 //!   [`read_vdb`] checks the header itself and runs the crate inside `catch_unwind` (with a
 //!   panic hook that keeps those panics quiet): such files are errors, not crashes;
-//! - it misreads grids saved as half floats (see [`parse_vdb`]): refused with an error;
 //! - it ignores tiles at the root level and the root's background value, so haze checks the
 //!   inactive values it can see (they must be 0) and that the active voxels it found span the
 //!   bounding box the file records;
-//! - known gap: a corrupt (not truncated) file can announce a huge block, which vdb-rs
-//!   allocates before reading it; that aborts like any failed allocation (seen when fuzzing
-//!   with random byte changes; truncated files are errors).
+//! - it trusts the root nodes' origins, which a corrupt file can make overflow the i32 voxel
+//!   coordinates or repeat: haze checks them before walking the tree ([`check_roots`]).
 
 use crate::volume::Grid;
 use glam::{Affine3A, DVec3, Mat3A, Vec3};
@@ -141,6 +146,14 @@ fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, vdb_rs::ParseError>) -> 
         Ok(Err(vdb_rs::ParseError::IoError(e))) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
             Err(VdbError::File(format!("truncated .vdb file: it ends in the middle of {what}")))
         }
+        // A length read from the file that runs past its end (vendor/vdb-rs/PATCHES.md): the
+        // file is cut short, or the length is corrupt; which, the reader cannot tell.
+        Ok(Err(e @ vdb_rs::ParseError::PastEnd { .. })) => {
+            Err(VdbError::File(format!("truncated .vdb file, or a corrupt length in it ({what}): {e}")))
+        }
+        Ok(Err(e @ vdb_rs::ParseError::BadLength { .. })) => {
+            Err(VdbError::File(format!("corrupt .vdb file ({what}): {e}")))
+        }
         Ok(Err(e)) => Err(VdbError::File(format!("unreadable .vdb file ({what}): {e}"))),
         // vdb-rs panics on what it does not support (see the module comment).
         Err(p) => Err(VdbError::File(format!(
@@ -182,21 +195,21 @@ pub fn parse_vdb(bytes: &[u8], name: &str) -> Result<VdbGrid, VdbError> {
         }));
     };
     // Float grids, also those saved as half floats (type names `Tree_float_5_4_3` and
-    // `Tree_float_5_4_3_HalfFloat`); vdb-rs reads both as f32.
-    if !desc.grid_type.starts_with("Tree_float_5_4_3") {
+    // `Tree_float_5_4_3_HalfFloat`); vdb-rs reads both as f32 (half floats: with haze's patch,
+    // vendor/vdb-rs/PATCHES.md).
+    if !desc.grid_type.starts_with("Tree_float_") {
         return Err(VdbError::Grid(format!(
             "grid '{name}' holds {} values ({}); haze reads float grids",
             value_type(&desc.grid_type),
             desc.grid_type
         )));
     }
-    // vdb-rs 0.6 misreads half-float grids: OpenVDB writes nothing (not even a length) for an
-    // empty array of half values, and vdb-rs reads a length there and loses its place (its
-    // development version skips empty arrays of every type, which breaks float grids instead).
-    if desc.grid_type.ends_with("_HalfFloat") || desc.meta_data.is_half_float() {
+    // Exactly those two: the suffix decides how the values are stored.
+    if !matches!(desc.grid_type.as_str(), "Tree_float_5_4_3" | "Tree_float_5_4_3_HalfFloat") {
         return Err(VdbError::Grid(format!(
-            "grid '{name}' is saved as 16-bit half floats, which haze's OpenVDB reader (vdb-rs 0.6) cannot read: \
-             re-save it with 32-bit floats (e.g. Blender's fluid cache precision 'Full')"
+            "grid '{name}' is a float grid of tree type {}, which haze does not read (it reads \
+             Tree_float_5_4_3, saved as full or half floats)",
+            desc.grid_type
         )));
     }
     if !desc.instance_parent.is_empty() {
@@ -243,6 +256,7 @@ fn extent(level: VdbLevel) -> i64 {
 
 fn densify(grid: &vdb_rs::Grid<f32>, meta: &vdb_rs::Metadata, name: &str) -> Result<VdbGrid, VdbError> {
     let grid_err = |m: String| VdbError::Grid(format!("grid '{name}': {m}"));
+    check_roots(grid).map_err(|m| VdbError::File(format!("corrupt .vdb file (grid '{name}'): {m}")))?;
     check_inactive(grid).map_err(grid_err)?;
     // The active bounding box (inclusive voxel indices).
     let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
@@ -317,6 +331,25 @@ fn densify(grid: &vdb_rs::Grid<f32>, meta: &vdb_rs::Metadata, name: &str) -> Res
         to_world,
         index_origin: origin.map(|o| o as i32),
     })
+}
+
+/// The root nodes' origins, before anything walks the tree: OpenVDB's root node keys its
+/// children (4096^3 voxels each) by their origin, a multiple of 4096 on each axis, each origin
+/// once. A corrupt file can break both, and vdb-rs does not check: an origin near `i32::MAX`
+/// overflows its voxel coordinates (origin + offset, up to 4095), and a repeated origin makes
+/// the same voxels be filled again for every copy.
+fn check_roots(grid: &vdb_rs::Grid<f32>) -> Result<(), String> {
+    let mut seen = std::collections::HashSet::new();
+    for n5 in &grid.tree.root_nodes {
+        let o = n5.origin.to_array();
+        if o.iter().any(|c| c % 4096 != 0) {
+            return Err(format!("a root node's origin {o:?} is not a multiple of 4096"));
+        }
+        if !seen.insert(o) {
+            return Err(format!("two root nodes at {o:?}"));
+        }
+    }
+    Ok(())
 }
 
 /// Inactive values must be 0 (the background of a fog volume): vdb-rs drops the background

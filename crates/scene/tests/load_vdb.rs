@@ -146,6 +146,50 @@ fn non_uniform_voxels() {
     }
 }
 
+/// `x` rounded to the nearest half float (IEEE 754 binary16: 11 significant bits, ties to
+/// even), for normal half values (magnitudes in [2^-14, 65504]) and zero: the low 13 of float32's
+/// 24 significant bits rounded away. Independent of the `half` crate vdb-rs converts with.
+fn round_to_half(x: f32) -> f32 {
+    let b = x.to_bits();
+    f32::from_bits((b + 0xfff + ((b >> 13) & 1)) & !0x1fff)
+}
+
+/// Half floats (`half.vdb`: the grid of `smoke.vdb` saved by OpenVDB as 16-bit half floats, with
+/// a leaf of inactive background whose empty array of values OpenVDB stores as nothing, not even
+/// a length, the case vdb-rs 0.6.0 misread: `vendor/vdb-rs/PATCHES.md`): the dense grid is the
+/// float grid's rounded to half precision, cell for cell, and the lookups agree within it.
+#[test]
+fn half_floats_are_the_float_grid_rounded() {
+    assert_eq!(round_to_half(1.0 + 1.0 / 4096.0), 1.0);
+    assert_eq!(round_to_half(1.0 + 3.0 / 4096.0), 1.0 + 1.0 / 1024.0);
+    assert_eq!(round_to_half(0.1), 0.099975586);
+    let float = medium(&vdb_scene("smoke.vdb"));
+    let half = medium(&vdb_scene("half.vdb"));
+    assert_eq!(half.sigma_t.bbox, float.sigma_t.bbox);
+    let (VolumeData::Grid { grid: f, .. }, VolumeData::Grid { grid: h, .. }) =
+        (&float.sigma_t.data, &half.sigma_t.data)
+    else {
+        panic!("grid volumes expected");
+    };
+    assert_eq!(h.res, f.res);
+    let (mut rounded, mut nonzero) = (0, 0);
+    for (i, (x, y)) in f.data.iter().zip(&h.data).enumerate() {
+        assert_eq!(*y, round_to_half(*x), "cell {i}: {y} (half.vdb), {x} (smoke.vdb)");
+        rounded += (x != y) as usize;
+        nonzero += (*x != 0.0) as usize;
+    }
+    // Not the float grid itself: most values lose bits.
+    assert!(nonzero == 210 && rounded > nonzero / 2, "{rounded} of {nonzero} values rounded");
+    // Lookups (scale 2, densities below 1.3) agree within half precision: 2^-11 relative.
+    let (lo, hi) = float.sigma_t.bbox;
+    let mut s = Sampler::from_seed(16);
+    for _ in 0..2000 {
+        let p = lo + (hi - lo) * Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let (x, y) = (float.sigma_t(p)[0], half.sigma_t(p)[0]);
+        assert!((x - y).abs() <= 2.6 / 2048.0, "at {p}: {y} (half) vs {x} (float)");
+    }
+}
+
 /// A fresh directory for one test's files.
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("haze-vdb-{}-{name}", std::process::id()));
@@ -265,11 +309,28 @@ fn bad_vdb_files() {
         &volume("sigma_t", "grid.vdb", "<string name=\"grid\" value=\"density\"/>"),
         &[":7:", GRID, "grid 'density' is a level set"],
     );
+    // A corrupt root node origin (tiles.vdb: one root node, at (0, 0, 0); after the map's name
+    // and five vectors, the buffer count, background, tile count and root count): near
+    // i32::MAX, its voxel coordinates would overflow.
+    let mut b = bytes("tiles.vdb");
+    let at = b.windows(15).position(|w| w == b"UniformScaleMap").unwrap() + 15 + 5 * 24 + 16;
+    assert_eq!(b[at..at + 12], [0; 12]);
+    b[at..at + 4].copy_from_slice(&(i32::MAX - 100).to_le_bytes());
     fails(
-        "half-floats",
-        Some(&bytes("half.vdb")),
+        "root-origin",
+        Some(&b),
         &sigma_t,
-        &[":6:", FILENAME, "grid 'density' is saved as 16-bit half floats", "re-save it with 32-bit floats"],
+        &[":6:", FILENAME, "corrupt .vdb file (grid 'density'): a root node's origin [2147483547, 0, 0]"],
+    );
+    // Half floats are read like float grids, and checked like them.
+    let mut b = bytes("half.vdb");
+    let at = b.windows(6).position(|w| w == b"_HalfF").expect("a half-float grid");
+    b[at + 1] = b'X';
+    fails(
+        "half-type-renamed",
+        Some(&b),
+        &sigma_t,
+        &[":6:", FILENAME, "grid 'density' is a float grid of tree type Tree_float_5_4_3_XalfFloat"],
     );
     fails(
         "too-sparse",
