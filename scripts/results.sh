@@ -12,7 +12,8 @@
 #     REF_METHOD references (volpath cannot find the spot's caustic through the ball, so it cannot
 #     be the reference there), with volpath's error split into bias and noise
 #     (scripts/bias-noise.py, with $PYTHON if it has numpy and OpenEXR);
-#   - the heterogeneous smoke plume (PLUME_*): scenes/smoke-plume.xml at PLUME_RES, every method
+#   - the heterogeneous smoke plume (PLUME_*): scenes/smoke-plume.xml at PLUME_RES and each of
+#     PLUME_DENSITIES, every method
 #     against a volpath reference (volpath is the method to beat in heterogeneous media, and its
 #     reference has no many-light method's correlated noise);
 # scripts/aggregate-results.py turns the runs of one scene into one table: median RMSE over the
@@ -49,6 +50,9 @@ WHOLE_BUDGET=${WHOLE_BUDGET:-20}
 PLUME_REF_TIME=${PLUME_REF_TIME:-240}
 PLUME_BUDGET=${PLUME_BUDGET:-10}
 PLUME_RES=${PLUME_RES:-"64 80"}
+# Density scales of the plume (the scene's `density`, Mitsuba's `scale`): 8 is the dense smoke
+# of the demo; the thinner ones show where the many-light methods stand against volpath.
+PLUME_DENSITIES=${PLUME_DENSITIES:-"8 2 1"}
 # Two groups per run, separated by "--": one sample per pass, then each method's auto samples per
 # pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
@@ -183,19 +187,21 @@ for part in $PARTS; do
       ;;
     plume)
       read -r pw ph <<< "$PLUME_RES"
-      defines="-D res=$pw -D res_y=$ph"
-      ref=$OUT/plume/reference.exr
-      if [ "${REUSE_REF:-0}" = 1 ] && [ -f "$ref" ]; then
-        echo "reusing $ref" >&2
-      else
-        mkdir -p "$(dirname "$ref")"
-        # shellcheck disable=SC2086
-        "$HAZE" reference scenes/smoke-plume.xml $defines --time "$PLUME_REF_TIME" --seed 1000003 -o "$ref" >&2
-      fi
-      start_load=$(load)
-      table=$(compare plume/smoke-plume scenes/smoke-plume.xml "$ref" "$PLUME_BUDGET" "$defines" "${PLUME_METHODS[@]}")
-      printf '\n## smoke-plume (heterogeneous), %sx%s, %s s per method\n\n`scenes/smoke-plume.xml`, volpath reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
-        "$pw" "$ph" "$PLUME_BUDGET" "$PLUME_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      for density in $PLUME_DENSITIES; do
+        defines="-D res=$pw -D res_y=$ph -D density=$density"
+        ref=$OUT/plume-$density/reference.exr
+        if [ "${REUSE_REF:-0}" = 1 ] && [ -f "$ref" ]; then
+          echo "reusing $ref" >&2
+        else
+          mkdir -p "$(dirname "$ref")"
+          # shellcheck disable=SC2086
+          "$HAZE" reference scenes/smoke-plume.xml $defines --time "$PLUME_REF_TIME" --seed 1000003 -o "$ref" >&2
+        fi
+        start_load=$(load)
+        table=$(compare "plume-$density/smoke-plume" scenes/smoke-plume.xml "$ref" "$PLUME_BUDGET" "$defines" "${PLUME_METHODS[@]}")
+        printf '\n## smoke-plume (heterogeneous, density %s), %sx%s, %s s per method\n\n`scenes/smoke-plume.xml -D density=%s`, volpath reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
+          "$density" "$pw" "$ph" "$PLUME_BUDGET" "$density" "$PLUME_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      done
       ;;
     *) echo "unknown part '$part' (bench, validation, wide, whole, plume)" >&2; exit 1 ;;
   esac
