@@ -1,13 +1,15 @@
 //! Ray queries over all shapes: triangles of every mesh in one bounding volume hierarchy
-//! (`obvhs`' compressed wide BVH, chosen by measurement: see `tools/bvh-candidates/README.md`),
-//! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
-//! have few of them).
+//! (built by `obvhs`, chosen by measurement: see `tools/bvh-candidates/README.md`), tested with
+//! a watertight triangle test; analytic spheres and disks tested directly (scenes have few of
+//! them).
 //!
-//! obvhs builds the tree; traversal is ours (docs/performance.md, "Traversal of the peer
-//! scenes" and "Front-to-back traversal and per-query costs"): the node test reads child boxes decoded to f32 once
-//! ([`wide`]), the loop ([`Accel::traverse`]) visits the nearest hit child first and prunes
-//! pushed children by their entry distance, and each leaf's 1-3 triangles are tested at once in
-//! SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
+//! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide tree traversal reads
+//! and the traversal are ours (docs/performance.md, "Traversal of the peer scenes", "Front-to-back
+//! traversal and per-query costs" and "issue 17, fourth part"): [`wide`] collapses the binary
+//! tree into nodes of 8 f32 child boxes tested at once in SSE lanes, the loop
+//! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
+//! entry distance, and each leaf's 1-4 triangles are tested at once in SSE lanes
+//! ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
 //!
 //! A watertight triangle test is not enough for a watertight traversal (issue 16, "the leak":
 //! paths escaped closed cube rooms). Two things in the BVH lost hits, and both are handled here
@@ -17,17 +19,17 @@
 //!   shared by two flat boxes could miss both. Every triangle's box is therefore padded by
 //!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
 //!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions). The
-//!   decoded boxes are obvhs's quantised ones, which enclose these padded boxes.
-//! - obvhs's node test clamps the entry distance of every box to `1e-4`
-//!   (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
+//!   node boxes are the binary tree's, which enclose these padded boxes.
+//! - obvhs's node test (used until the third part) clamped the entry distance of every box to
+//!   `1e-4` (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
 //!   just in front of a point in a medium, or the adjacent wall at a corner. The traversal ray
 //!   therefore starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from
 //!   the real origin) report their distances in that shifted parametrisation. Our node test
 //!   ([`wide::WideNode::intersect`]) starts boxes at `t = 0` of that ray; the back-off is kept
 //!   as a second guard.
 //!
-//! Coordinates whose magnitude obvhs's quantised node boxes cannot represent are refused when
-//! the scene is built ([`MAX_COORDINATE`]).
+//! Coordinates whose magnitude the triangle test cannot handle are refused when the scene is
+//! built ([`MAX_COORDINATE`]).
 
 mod watertight;
 mod wide;
@@ -55,9 +57,9 @@ const BOX_PAD: f32 = 2e-6;
 /// real origin, twice obvhs's fixed box `tmin` of `1e-4`.
 const ORIGIN_BACKOFF: f32 = 2e-4;
 
-/// Largest coordinate magnitude of scene geometry haze accepts. obvhs stores node boxes as an
-/// origin plus power-of-two extents in an 8-bit exponent; extents beyond about `2^100` overflow
-/// it (a cube scaled by `1e30` panicked inside obvhs). The watertight triangle test multiplies
+/// Largest coordinate magnitude of scene geometry haze accepts. obvhs's compressed wide BVH
+/// (traversed until issue 17's fourth part) stored node boxes with an 8-bit exponent and
+/// panicked on a cube scaled by `1e30`. The watertight triangle test multiplies
 /// three coordinate differences, which overflows f32 beyond about `7e12`; rays then pass
 /// through walls. `1e12` keeps every product finite for rays within the scene.
 pub const MAX_COORDINATE: f32 = 1e12;
@@ -173,9 +175,9 @@ struct Leaf {
 }
 
 pub struct Accel {
-    /// The tree obvhs built, its nodes decoded ([`wide`]): what traversal reads.
+    /// The wide tree collapsed from obvhs's binary tree ([`wide`]): what traversal reads.
     bvh: Option<WideBvh>,
-    /// Every BVH leaf's triangles as one packet (obvhs puts at most 3 in a leaf).
+    /// Every BVH leaf's triangles as one packet, in [`WideBvh::leaves`]' order.
     leaves: Vec<Leaf>,
     analytic: Vec<Analytic>,
     lo: Vec3,
@@ -183,14 +185,19 @@ pub struct Accel {
 }
 
 /// BVH build settings: obvhs' `slow_build` (wider PLOC search, more reinsertion: a tree that
-/// traverses faster) up to a million triangles, where it builds in well under a second, and
-/// `medium_build` above. Without pre-splitting in both: a split triangle would sit in several
-/// leaves, and [`Accel::shadow_hits`] must see each surface once.
+/// traverses faster) up to a million triangles, and `medium_build` above. Without pre-splitting
+/// in both: a split triangle would sit in several leaves, and [`Accel::shadow_hits`] must see
+/// each surface once. Leaves of up to [`LEAF_SIZE`] triangles (one packet), merged by obvhs's
+/// SAH leaf collapse with a node traversal cost of 2 triangle tests: obvhs's default 3 made
+/// leaves of four large wall triangles in the room scenes, whose box every ray enters (foggy-room
+/// and bench-fog-shadow 13-15% slower than with 2; 1 and 0.5 measured like 2 there and 2-7%
+/// slower than 3 on the peer spheres; docs/performance.md, "issue 17, fourth part").
 fn build_params(triangles: usize) -> BvhBuildParams {
     let mut p =
         if triangles <= 1_000_000 { BvhBuildParams::slow_build() } else { BvhBuildParams::medium_build() };
     p.pre_split = false;
     p.max_prims_per_leaf = LEAF_SIZE;
+    p.collapse_traversal_cost = 2.0;
     p
 }
 
