@@ -6,7 +6,7 @@
 //! obvhs builds the binary tree (PLOC, reinsertion, and its SAH leaf collapse into leaves of up
 //! to [`LEAF_SIZE`] triangles: `obvhs::bvh2::builder::build_bvh2`); [`WideBvh::new`] turns it
 //! into a `WIDTH`-wide tree the way wide BVHs are usually built from binary ones (Wald, Benthin
-//! and Boulos 2008, "Getting Rid of Packets", section 3.1): a node's children are found by
+//! and Boulos 2008, "Getting Rid of Packets"): a node's children are found by
 //! opening, again and again, the inner child of largest surface area until there are `WIDTH`
 //! children or none left to open. The binary tree's leaves stay leaves, so each holds up to four
 //! triangles, one SSE packet (`WatertightRay::intersect_packet`).
