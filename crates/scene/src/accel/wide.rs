@@ -40,12 +40,15 @@ pub const LEAF: u32 = 1 << 31;
 /// sign that puts its entry after its exit on every axis (the inverse direction is finite and
 /// non-zero, obvhs's `safe_inverse`), so no mask of valid slots is needed.
 #[derive(Clone, Copy, Debug)]
-#[repr(align(64))]
+#[repr(C, align(64))]
 pub struct WideNode {
-    planes: [[Vec4; HALVES]; 6],
     /// Child slot `c`: an inner node's index in [`WideBvh::nodes`], or [`LEAF`] `|` the index of
-    /// a leaf in [`WideBvh::leaves`] (0 for an empty slot, never hit).
+    /// a leaf in [`WideBvh::leaves`] (0 for an empty slot, never hit; the root, index 0, is
+    /// nobody's child). Slots are filled in order, so `children[4] == 0` means lanes 4-7 are
+    /// empty. First, so that a node of at most 4 children reads two cache lines.
     pub children: [u32; WIDTH],
+    /// `planes[h][p]`: plane `p` of lanes `4h..4h + 4`.
+    planes: [[Vec4; 6]; HALVES],
 }
 
 /// A ray prepared for [`WideNode::intersect`]: for each axis, which of the two planes is met
@@ -90,8 +93,8 @@ impl WideNode {
             None if plane % 2 == 0 => f32::INFINITY,
             None => f32::NEG_INFINITY,
         };
-        let planes = std::array::from_fn(|plane| {
-            std::array::from_fn(|h| {
+        let planes = std::array::from_fn(|h| {
+            std::array::from_fn(|plane| {
                 Vec4::new(
                     lane(4 * h, plane),
                     lane(4 * h + 1, plane),
@@ -112,12 +115,17 @@ impl WideNode {
         let mut mask = 0;
         let mut entry = [Vec4::ZERO; HALVES];
         for (h, entry) in entry.iter_mut().enumerate() {
+            if h > 0 && self.children[4 * h] == 0 {
+                // Lanes 4h.. are empty (slots fill in order): nothing to test or read.
+                *entry = Vec4::INFINITY;
+                continue;
+            }
             let mut lo = ray.t_min;
             let mut hi = t_max;
             for a in 0..3 {
                 let n = ray.near[a];
-                let t_near = (self.planes[n][h] - ray.o[a]) * ray.inv[a];
-                let t_far = (self.planes[n ^ 1][h] - ray.o[a]) * ray.inv[a];
+                let t_near = (self.planes[h][n] - ray.o[a]) * ray.inv[a];
+                let t_far = (self.planes[h][n ^ 1] - ray.o[a]) * ray.inv[a];
                 lo = lo.max(t_near);
                 hi = hi.min(t_far);
             }
@@ -197,7 +205,7 @@ impl WideBvh {
         let mut need = vec![0usize; nodes.len()];
         for i in (0..nodes.len()).rev() {
             let n = &nodes[i];
-            let slots = (0..WIDTH).filter(|&c| n.planes[0][c / 4][c % 4] != f32::INFINITY);
+            let slots = (0..WIDTH).filter(|&c| n.planes[c / 4][0][c % 4] != f32::INFINITY);
             let deepest = slots
                 .clone()
                 .filter(|&c| n.children[c] & LEAF == 0)
@@ -250,7 +258,7 @@ mod tests {
                 }
                 let node = &wide.nodes[x as usize];
                 for c in 0..WIDTH {
-                    let lane = |pl: usize| node.planes[pl][c / 4][c % 4];
+                    let lane = |pl: usize| node.planes[c / 4][pl][c % 4];
                     if lane(0) == f32::INFINITY {
                         continue;
                     }
