@@ -52,7 +52,7 @@ pub struct WideNode {
 }
 
 /// A ray prepared for [`WideNode::intersect`]: for each axis, which of the two planes is met
-/// first (`near`, chosen once per ray by the direction's sign, so the slab test needs no min/max
+/// first (`near`, chosen once per ray by the sign of `1 / d`, so the slab test needs no min/max
 /// of the two plane distances), the origin and the inverse direction splatted to 4 lanes.
 #[derive(Clone, Copy, Debug)]
 pub struct WideRay {
