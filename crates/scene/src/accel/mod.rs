@@ -1,13 +1,15 @@
 //! Ray queries over all shapes: triangles of every mesh in one bounding volume hierarchy
-//! (`obvhs`' compressed wide BVH, chosen by measurement: see `tools/bvh-candidates/README.md`),
-//! tested with a watertight triangle test; analytic spheres and disks tested directly (scenes
-//! have few of them).
+//! (built by `obvhs`, chosen by measurement: see `tools/bvh-candidates/README.md`), tested with
+//! a watertight triangle test; analytic spheres and disks tested directly (scenes have few of
+//! them).
 //!
-//! obvhs builds the tree; traversal is ours (docs/performance.md, "Traversal of the peer
-//! scenes" and "Front-to-back traversal and per-query costs"): the node test reads child boxes decoded to f32 once
-//! ([`wide`]), the loop ([`Accel::traverse`]) visits the nearest hit child first and prunes
-//! pushed children by their entry distance, and each leaf's 1-3 triangles are tested at once in
-//! SSE lanes ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
+//! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide tree traversal reads
+//! and the traversal are ours (docs/performance.md, "Traversal of the peer scenes", "Front-to-back
+//! traversal and per-query costs" and "issue 17, fourth part"): [`wide`] collapses the binary
+//! tree into nodes of 8 f32 child boxes tested at once in SSE lanes, the loop
+//! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
+//! entry distance, and each leaf's 1-4 triangles are tested at once in SSE lanes
+//! ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
 //!
 //! A watertight triangle test is not enough for a watertight traversal (issue 16, "the leak":
 //! paths escaped closed cube rooms). Two things in the BVH lost hits, and both are handled here
@@ -17,23 +19,23 @@
 //!   shared by two flat boxes could miss both. Every triangle's box is therefore padded by
 //!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
 //!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions). The
-//!   decoded boxes are obvhs's quantised ones, which enclose these padded boxes.
-//! - obvhs's node test clamps the entry distance of every box to `1e-4`
-//!   (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
+//!   node boxes are the binary tree's, which enclose these padded boxes.
+//! - obvhs's node test (used until the third part) clamped the entry distance of every box to
+//!   `1e-4` (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
 //!   just in front of a point in a medium, or the adjacent wall at a corner. The traversal ray
 //!   therefore starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from
 //!   the real origin) report their distances in that shifted parametrisation. Our node test
 //!   ([`wide::WideNode::intersect`]) starts boxes at `t = 0` of that ray; the back-off is kept
 //!   as a second guard.
 //!
-//! Coordinates whose magnitude obvhs's quantised node boxes cannot represent are refused when
-//! the scene is built ([`MAX_COORDINATE`]).
+//! Coordinates whose magnitude the triangle test cannot handle are refused when the scene is
+//! built ([`MAX_COORDINATE`]).
 
 mod watertight;
 mod wide;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
-use wide::{leaf_children, WideBvh, WideRay, LEAF};
+use wide::{WideBvh, WideRay, LEAF, LEAF_SIZE, WIDTH};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
@@ -41,7 +43,7 @@ use crate::shape::{Geometry, Shape};
 use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::{builder::build_cwbvh, CwBvh};
+use obvhs::bvh2::builder::build_bvh2;
 use obvhs::ray::safe_inverse;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
@@ -55,9 +57,9 @@ const BOX_PAD: f32 = 2e-6;
 /// real origin, twice obvhs's fixed box `tmin` of `1e-4`.
 const ORIGIN_BACKOFF: f32 = 2e-4;
 
-/// Largest coordinate magnitude of scene geometry haze accepts. obvhs stores node boxes as an
-/// origin plus power-of-two extents in an 8-bit exponent; extents beyond about `2^100` overflow
-/// it (a cube scaled by `1e30` panicked inside obvhs). The watertight triangle test multiplies
+/// Largest coordinate magnitude of scene geometry haze accepts. obvhs's compressed wide BVH
+/// (traversed until issue 17's fourth part) stored node boxes with an 8-bit exponent and
+/// panicked on a cube scaled by `1e30`. The watertight triangle test multiplies
 /// three coordinate differences, which overflows f32 beyond about `7e12`; rays then pass
 /// through walls. `1e12` keeps every product finite for rays within the scene.
 pub const MAX_COORDINATE: f32 = 1e12;
@@ -173,9 +175,9 @@ struct Leaf {
 }
 
 pub struct Accel {
-    /// The tree obvhs built, its nodes decoded ([`wide`]): what traversal reads.
+    /// The wide tree collapsed from obvhs's binary tree ([`wide`]): what traversal reads.
     bvh: Option<WideBvh>,
-    /// Every BVH leaf's triangles as one packet (obvhs puts at most 3 in a leaf).
+    /// Every BVH leaf's triangles as one packet, in [`WideBvh::leaves`]' order.
     leaves: Vec<Leaf>,
     analytic: Vec<Analytic>,
     lo: Vec3,
@@ -183,39 +185,38 @@ pub struct Accel {
 }
 
 /// BVH build settings: obvhs' `slow_build` (wider PLOC search, more reinsertion: a tree that
-/// traverses faster) up to a million triangles, where it builds in well under a second, and
-/// `medium_build` above. Without pre-splitting in both: a split triangle would sit in several
-/// leaves, and [`Accel::shadow_hits`] must see each surface once.
+/// traverses faster) up to a million triangles, and `medium_build` above. Without pre-splitting
+/// in both: a split triangle would sit in several leaves, and [`Accel::shadow_hits`] must see
+/// each surface once. Leaves of up to [`LEAF_SIZE`] triangles (one packet), merged by obvhs's
+/// SAH leaf collapse with a node traversal cost of 2 triangle tests: obvhs's default 3 made
+/// leaves of four large wall triangles in the room scenes, whose box every ray enters (foggy-room
+/// and bench-fog-shadow 13-15% slower than with 2; 1 and 0.5 measured like 2 there and 2-7%
+/// slower than 3 on the peer spheres; docs/performance.md, "issue 17, fourth part").
 fn build_params(triangles: usize) -> BvhBuildParams {
     let mut p =
         if triangles <= 1_000_000 { BvhBuildParams::slow_build() } else { BvhBuildParams::medium_build() };
     p.pre_split = false;
+    p.max_prims_per_leaf = LEAF_SIZE;
+    p.collapse_traversal_cost = 2.0;
     p
 }
 
-/// One [`Leaf`] per leaf child of every node of `bvh`, in node order and by primitive offset
-/// within a node (the order [`wide::WideBvh::new`] numbers a node's leaves in), and for each node
-/// the index of its first leaf.
-fn leaf_packets(bvh: &CwBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<u32>) {
-    let mut leaves = Vec::new();
-    let mut leaf_base = Vec::with_capacity(bvh.nodes.len());
-    for node in &bvh.nodes {
-        leaf_base.push(leaves.len() as u32);
-        let mut children: Vec<(u32, u32)> = leaf_children(node).collect();
-        children.sort_unstable();
-        for (offset, count) in children {
-            let first = (node.primitive_base_idx + offset) as usize;
-            let run = &tris[first..first + count as usize];
+/// One [`Leaf`] per leaf of `bvh`, in its order: `tris` are the triangles in the order of
+/// `bvh.primitive_indices`, which the leaf runs index.
+fn leaf_packets(bvh: &WideBvh, tris: &[TriRef]) -> Vec<Leaf> {
+    bvh.leaves
+        .iter()
+        .map(|&(first, count)| {
+            let run = &tris[first as usize..(first + count) as usize];
             let soa: Vec<TriSoa> = run.iter().map(|t| t.v).collect();
             let blocks = run.iter().enumerate().fold(0, |m, (lane, t)| m | u32::from(t.blocks) << lane);
             let ids = std::array::from_fn(|lane| {
                 run.get(lane).map_or(TriId::default(), |t| TriId { shape: t.shape, prim: t.prim })
             });
             let normals = std::array::from_fn(|lane| run.get(lane).map_or(Vec3::ZERO, |t| t.n));
-            leaves.push(Leaf { packet: TriPacket::new(&soa), ids, normals, blocks });
-        }
-    }
-    (leaves, leaf_base)
+            Leaf { packet: TriPacket::new(&soa), ids, normals, blocks }
+        })
+        .collect()
 }
 
 impl Accel {
@@ -286,10 +287,9 @@ impl Accel {
                     Aabb::new(b.min - pad, b.max + pad)
                 })
                 .collect();
-            let bvh = build_cwbvh(&boxes, build_params(flat.len()), &mut Default::default());
-            let tris: Vec<TriRef> = bvh.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
-            let (leaves, leaf_base) = leaf_packets(&bvh, &tris);
-            let wide = WideBvh::new(&bvh, &leaf_base);
+            let wide = WideBvh::new(build_bvh2(&boxes, build_params(flat.len()), &mut Default::default()));
+            let tris: Vec<TriRef> = wide.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
+            let leaves = leaf_packets(&wide, &tris);
             (Some(wide), leaves)
         };
         Accel { bvh, leaves, analytic, lo, hi }
@@ -323,7 +323,7 @@ impl Accel {
             &mut small
         } else {
             // A degenerate tree (deeper than any scene measured needs): a stack of its size.
-            large.resize(wide.stack_need.min(wide.nodes.len() * 8 + 1), Entry::default());
+            large.resize(wide.stack_need.min(wide.nodes.len() * WIDTH + 1), Entry::default());
             &mut large
         };
         // One call site, so that `test` is inlined into the loop.
@@ -341,7 +341,7 @@ impl Accel {
         mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-        let ray = WideRay::new(o, d, inv, 0.0);
+        let ray = WideRay::new(o, inv, 0.0);
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
@@ -353,7 +353,7 @@ impl Accel {
                 }
             } else {
                 let node = &wide.nodes[cur as usize];
-                let (mut mask, [lo0, lo1]) = node.intersect(&ray, t_max);
+                let (mut mask, entry) = node.intersect(&ray, t_max);
                 if mask != 0 {
                     let c = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -365,10 +365,7 @@ impl Accel {
                     // and taken next. The others are popped in any order but each still
                     // pruned by its entry distance (a full insertion sort cost more in branch
                     // mispredictions than it saved in visits, measured).
-                    let t_near: [f32; 8] = {
-                        let (a, b) = (lo0.to_array(), lo1.to_array());
-                        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
-                    };
+                    let t_near: [f32; WIDTH] = std::array::from_fn(|c| entry[c / 4][c % 4]);
                     let mut best = sp;
                     let mut best_t = t_near[c];
                     stack[sp] = Entry { node: node.children[c], t: best_t };
@@ -684,6 +681,86 @@ mod tests {
                 assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
             }
         }
+    }
+
+    /// The wide tree with its 4-triangle leaves returns exactly the brute-force closest hit
+    /// (the same watertight test, so the same `t` bits) for the rays that stress a traversal:
+    /// rays starting on a triangle (hits at `t` near 0), rays grazing a tessellated plane (in
+    /// its plane, or a hair above or below it), and axis-aligned rays whose zero components
+    /// are `-0.0` (their inverse is `-1 / f32::EPSILON`: the near plane must follow its sign).
+    #[test]
+    fn wide_tree_matches_brute_force_on_surfaces_and_grazing_rays() {
+        let mut s = Sampler::from_seed(5);
+        let mut tris: Vec<[Vec3; 3]> = Vec::new();
+        // A 24 x 24 grid of quads in the plane z = 1 over [0, 6]^2 ...
+        let n = 24;
+        let g = |i: usize, j: usize| Vec3::new(i as f32 * 0.25, j as f32 * 0.25, 1.0);
+        for i in 0..n {
+            for j in 0..n {
+                tris.push([g(i, j), g(i + 1, j), g(i + 1, j + 1)]);
+                tris.push([g(i, j), g(i + 1, j + 1), g(i, j + 1)]);
+            }
+        }
+        // ... and random triangles above and below it.
+        for _ in 0..1500 {
+            let c = Vec3::new(s.next_1d() * 6.0, s.next_1d() * 6.0, s.next_1d() * 2.0);
+            let e =
+                |s: &mut Sampler| Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5) * 0.6;
+            tris.push([c + e(&mut s), c + e(&mut s), c + e(&mut s)]);
+        }
+        let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+        let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
+        let accel = Accel::build(&shapes);
+        let (mut found, mut cases) = (0, 0);
+        for i in 0..6000 {
+            let (o, d) = match i % 3 {
+                // From a point on a random triangle, in a random direction.
+                0 => {
+                    let t = tris[(s.next_1d() * tris.len() as f32) as usize % tris.len()];
+                    let (u, v) = (s.next_1d(), s.next_1d());
+                    let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                    (
+                        t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v,
+                        haze_core::sampling::sample_uniform_sphere(s.next_2d()),
+                    )
+                }
+                // Grazing the grid: in its plane (z = 1, d.z = +-0) or a hair off it.
+                1 => {
+                    let o = Vec3::new(s.next_1d() * 6.0, s.next_1d() * 6.0, 1.0);
+                    let phi = s.next_1d() * std::f32::consts::TAU;
+                    let dz = [0.0, -0.0, 1e-6, -1e-6][(i / 3) % 4];
+                    let o = if i % 2 == 0 { o } else { o + Vec3::new(0.0, 0.0, 1e-6) };
+                    (o, Vec3::new(phi.cos(), phi.sin(), dz).normalize())
+                }
+                // Axis-aligned, the other components -0.0 or +0.0.
+                _ => {
+                    let o = Vec3::new(s.next_1d() * 6.0, s.next_1d() * 6.0, s.next_1d() * 2.0);
+                    let axis = (i / 3) % 3;
+                    let z = if (i / 9) % 2 == 0 { -0.0 } else { 0.0 };
+                    let mut d = Vec3::splat(z);
+                    d[axis] = if (i / 18) % 2 == 0 { 1.0 } else { -1.0 };
+                    (o, d)
+                }
+            };
+            let ray = Ray::new(o, d);
+            let wt = WatertightRay::new(o.into(), d.into());
+            let brute = tris
+                .iter()
+                .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), T_MIN, f32::INFINITY))
+                .map(|h| h.0)
+                .fold(f32::INFINITY, f32::min);
+            let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
+            assert_eq!(got.to_bits(), brute.to_bits(), "case {i}: o {o}, d {d}: {got} vs {brute}");
+            assert!(!accel.occluded(&Ray { t_max: brute, ..ray }), "case {i}");
+            if brute.is_finite() {
+                assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }), "case {i}");
+                found += 1;
+            }
+            cases += 1;
+        }
+        // Enough hits to mean something, and enough misses to check for false hits.
+        assert!(found > cases / 3 && found < cases - cases / 10, "{found} hits of {cases}");
     }
 
     /// Rays from inside a closed cube always find the boundary (no leaks through edges).

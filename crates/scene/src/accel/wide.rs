@@ -1,43 +1,59 @@
-//! obvhs's compressed 8-wide nodes with their child boxes decoded to f32, for a cheaper node test,
-//! and each child slot resolved to the inner node or leaf it holds, for our traversal loop
-//! (`Accel::traverse` in `mod.rs`).
+//! A wide BVH collapsed from obvhs's binary tree: nodes of [`WIDTH`] children whose boxes are
+//! stored as f32 planes in SSE lanes (structure of arrays), tested all at once, and each child
+//! slot naming its inner node or leaf directly, for our traversal loop (`Accel::traverse` in
+//! `mod.rs`).
 //!
-//! A `CwBvhNode` stores each child box as 8-bit offsets on a per-node power-of-two grid (Ylitie,
-//! Karras and Laine 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
-//! BVHs", section 3.1). obvhs converts those 48 bytes to floats on every node test, which was
-//! about a third of all traversal time on the Mitsuba peer scenes (docs/performance.md,
-//! "Traversal of the peer scenes"). [`WideNode`] keeps the same tree with the boxes decoded
-//! once at build time; instead of obvhs's child metadata (octant-permuted inner children, leaf
-//! primitive runs) each slot holds the index of its node or leaf directly.
+//! obvhs builds the binary tree (PLOC, reinsertion, and its SAH leaf collapse into leaves of up
+//! to [`LEAF_SIZE`] triangles: `obvhs::bvh2::builder::build_bvh2`); [`WideBvh::new`] turns it
+//! into a `WIDTH`-wide tree the way wide BVHs are usually built from binary ones (Wald, Benthin
+//! and Boulos 2008, "Getting Rid of Packets"): a node's children are found by
+//! opening, again and again, the inner child of largest surface area until there are `WIDTH`
+//! children or none left to open. The binary tree's leaves stay leaves, so each holds up to four
+//! triangles, one SSE packet (`WatertightRay::intersect_packet`).
 //!
-//! The decoded boxes are the quantised ones (which obvhs rounds outwards, so they enclose the
-//! exact child boxes) up to one rounding of `p + 2^e q`, far below the pad every triangle's box
-//! carries (`BOX_PAD`). The exact boxes instead would save only ~1.5% of node and leaf visits
-//! on the peer scenes (measured with `examples/accel_bench.rs`) and leave less slack.
+//! Why not obvhs's compressed wide BVH (`CwBvh`), traversed until docs/performance.md's "issue
+//! 17, fourth part": its leaves hold at most 3 triangles (a unary 3-bit count), so one packet lane
+//! in four was always empty, and its child boxes are quantised to 8 bits per plane, which we
+//! decoded once into 256-byte nodes anyway. Here the boxes are the binary tree's exact f32 boxes
+//! of the padded triangle boxes (`BOX_PAD` in `mod.rs`), so the node test is as conservative as
+//! the padding makes it.
 
-use glam::{BVec4A, Vec3A, Vec4};
+use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::node::CwBvhNode;
-use obvhs::cwbvh::CwBvh;
+use obvhs::bvh2::Bvh2;
 
-/// Tag of a [`WideNode::children`] entry that is a leaf (the rest is the leaf's index in the
-/// caller's leaf array); untagged entries are indices of inner nodes in [`WideBvh::nodes`].
+/// Children per node: lanes of the node test, in groups of 4 ([`HALVES`] SSE vectors per plane).
+pub const WIDTH: usize = 4 * HALVES;
+/// SSE vectors per plane of a node.
+pub const HALVES: usize = 2;
+
+/// Most triangles in a leaf: one SSE packet.
+pub const LEAF_SIZE: u32 = 4;
+
+/// Tag of a [`WideNode::children`] entry that is a leaf (the rest is the leaf's index in
+/// [`WideBvh::leaves`]); untagged entries are indices of inner nodes in [`WideBvh::nodes`].
 pub const LEAF: u32 = 1 << 31;
 
-/// One node: the 8 child boxes as `[min x, max x, min y, max y, min z, max z]`, each 8 lanes in
-/// two `Vec4`s, and what each child slot holds.
+/// One node: the child boxes as `[min x, max x, min y, max y, min z, max z]`, each [`WIDTH`]
+/// lanes in [`HALVES`] `Vec4`s, and what each child slot holds. An empty slot has the empty box
+/// (`min = +inf`, `max = -inf`), which no ray enters: `(±inf - o) / d` is an infinity of the
+/// sign that puts its entry after its exit on every axis (the inverse direction is finite and
+/// non-zero, obvhs's `safe_inverse`), so no mask of valid slots is needed.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 pub struct WideNode {
-    planes: [[Vec4; 2]; 6],
     /// Child slot `c`: an inner node's index in [`WideBvh::nodes`], or [`LEAF`] `|` the index of
-    /// a leaf in the caller's leaf array (anything for an empty slot, which `valid` masks out).
-    pub children: [u32; 8],
-    /// Bit `c` set when slot `c` holds a child.
-    valid: u32,
+    /// a leaf in [`WideBvh::leaves`] (0 for an empty slot, never hit; the root, index 0, is
+    /// nobody's child). Slots are filled in order, so `children[4] == 0` means lanes 4-7 are
+    /// empty. First, so that a node of at most 4 children reads two cache lines.
+    pub children: [u32; WIDTH],
+    /// `planes[h][p]`: plane `p` of lanes `4h..4h + 4`.
+    planes: [[Vec4; 6]; HALVES],
 }
 
 /// A ray prepared for [`WideNode::intersect`]: for each axis, which of the two planes is met
-/// first (`near`), the origin and the inverse direction splatted to 4 lanes.
+/// first (`near`, chosen once per ray by the sign of `1 / d`, so the slab test needs no min/max
+/// of the two plane distances), the origin and the inverse direction splatted to 4 lanes.
 #[derive(Clone, Copy, Debug)]
 pub struct WideRay {
     near: [usize; 3],
@@ -48,9 +64,12 @@ pub struct WideRay {
 
 impl WideRay {
     /// `inv_d` is the componentwise inverse of the direction, finite (obvhs's `safe_inverse`).
+    /// The near plane follows the sign of `inv_d`, not of the direction: a component `-0.0` has
+    /// an inverse of `-1 / f32::EPSILON`, and choosing by `d < 0` (false for `-0.0`) paired
+    /// the planes wrongly, so such a ray missed every box it started in.
     #[inline]
-    pub fn new(o: Vec3A, d: Vec3A, inv_d: Vec3A, t_min: f32) -> Self {
-        let near = [0, 1, 2].map(|a| 2 * a + usize::from(d[a] < 0.0));
+    pub fn new(o: Vec3A, inv_d: Vec3A, t_min: f32) -> Self {
+        let near = [0, 1, 2].map(|a| 2 * a + usize::from(inv_d[a] < 0.0));
         WideRay {
             near,
             o: [0, 1, 2].map(|a| Vec4::splat(o[a])),
@@ -61,108 +80,141 @@ impl WideRay {
 }
 
 impl WideNode {
-    /// `boxes[c]`: the box of child `c` (anything for an empty slot); `leaf_base`: the index in
-    /// the caller's leaf array of this node's first leaf child, the node's leaf children being
-    /// numbered by their primitive offset.
-    fn new(n: &CwBvhNode, boxes: &[Aabb; 8], leaf_base: u32) -> Self {
-        let planes = std::array::from_fn(|i| {
-            let a = i / 2;
-            let lane = |c: usize| if i % 2 == 0 { boxes[c].min[a] } else { boxes[c].max[a] };
-            [Vec4::new(lane(0), lane(1), lane(2), lane(3)), Vec4::new(lane(4), lane(5), lane(6), lane(7))]
-        });
-        let leaf_starts: u32 = leaf_children(n).fold(0, |m, (offset, _)| m | 1 << offset);
-        let mut valid = 0;
-        let children = std::array::from_fn(|c| {
-            let meta = u32::from(n.child_meta[c]);
-            if n.imask & (1 << c) != 0 {
-                // obvhs (`traverse!`): inner children are stored from `child_base_idx` on, in
-                // slot order.
-                valid |= 1 << c;
-                n.child_base_idx + (u32::from(n.imask) & ((1 << c) - 1)).count_ones()
-            } else if meta != 0 {
-                valid |= 1 << c;
-                let offset = meta & 0b11111;
-                LEAF | (leaf_base + (leaf_starts & ((2u32 << offset) - 1)).count_ones() - 1)
-            } else {
-                0
+    /// `boxes`: the children's boxes (at most [`WIDTH`]) and what each slot holds.
+    fn new(children: &[(Aabb, u32)]) -> Self {
+        let lane = |c: usize, plane: usize| match children.get(c) {
+            Some((b, _)) => {
+                if plane % 2 == 0 {
+                    b.min[plane / 2]
+                } else {
+                    b.max[plane / 2]
+                }
             }
+            None if plane % 2 == 0 => f32::INFINITY,
+            None => f32::NEG_INFINITY,
+        };
+        let planes = std::array::from_fn(|h| {
+            std::array::from_fn(|plane| {
+                Vec4::new(
+                    lane(4 * h, plane),
+                    lane(4 * h + 1, plane),
+                    lane(4 * h + 2, plane),
+                    lane(4 * h + 3, plane),
+                )
+            })
         });
-        WideNode { planes, children, valid }
+        WideNode { planes, children: std::array::from_fn(|c| children.get(c).map_or(0, |x| x.1)) }
     }
 
-    /// The slab test of all 8 children (Kay and Kajiya 1986) for `t` in `[ray.t_min, t_max]`:
+    /// The slab test of all children (Kay and Kajiya 1986) for `t` in `[ray.t_min, t_max]`:
     /// bit `c` of the mask set when child `c` is hit, and each child's entry distance (lanes
-    /// 0-3 and 4-7), by which the traversal orders and prunes them.
+    /// 4h to 4h + 3 in vector `h`), by which the traversal orders and prunes them.
     #[inline(always)]
-    pub fn intersect(&self, ray: &WideRay, t_max: f32) -> (u32, [Vec4; 2]) {
+    pub fn intersect(&self, ray: &WideRay, t_max: f32) -> (u32, [Vec4; HALVES]) {
         let t_max = Vec4::splat(t_max);
-        let half = |h: usize| -> (BVec4A, Vec4) {
+        let mut mask = 0;
+        let mut entry = [Vec4::ZERO; HALVES];
+        for (h, entry) in entry.iter_mut().enumerate() {
+            if h > 0 && self.children[4 * h] == 0 {
+                // Lanes 4h.. are empty (slots fill in order): nothing to test or read.
+                *entry = Vec4::INFINITY;
+                continue;
+            }
             let mut lo = ray.t_min;
             let mut hi = t_max;
             for a in 0..3 {
                 let n = ray.near[a];
-                let t_near = (self.planes[n][h] - ray.o[a]) * ray.inv[a];
-                let t_far = (self.planes[n ^ 1][h] - ray.o[a]) * ray.inv[a];
+                let t_near = (self.planes[h][n] - ray.o[a]) * ray.inv[a];
+                let t_far = (self.planes[h][n ^ 1] - ray.o[a]) * ray.inv[a];
                 lo = lo.max(t_near);
                 hi = hi.min(t_far);
             }
-            (lo.cmple(hi), lo)
-        };
-        let (m0, lo0) = half(0);
-        let (m1, lo1) = half(1);
-        ((m0.bitmask() | m1.bitmask() << 4) & self.valid, [lo0, lo1])
+            mask |= lo.cmple(hi).bitmask() << (4 * h);
+            *entry = lo;
+        }
+        (mask, entry)
     }
 }
 
-/// The leaf children of `n` as `(offset, count)`: their first primitive's offset from
-/// `primitive_base_idx` and their number of primitives, in no particular order. A leaf child's
-/// metadata byte holds the offset in its low 5 bits and the count in unary in its high 3
-/// (obvhs `CwBvhNode::child_meta`).
-pub fn leaf_children(n: &CwBvhNode) -> impl Iterator<Item = (u32, u32)> + '_ {
-    (0..8).filter(|c| n.imask & (1 << c) == 0 && n.child_meta[*c] != 0).map(|c| {
-        let meta = n.child_meta[c];
-        (u32::from(meta & 0b11111), (meta >> 5).count_ones())
-    })
-}
-
-/// The nodes of a [`CwBvh`], decoded; primitive indices stay the `CwBvh`'s.
+/// The wide tree: nodes (the root first, every node before its children) and leaves, each leaf
+/// a run `(first, count)` of `primitive_indices` with `count <= LEAF_SIZE`.
 #[derive(Clone, Debug)]
 pub struct WideBvh {
     pub nodes: Vec<WideNode>,
+    pub leaves: Vec<(u32, u32)>,
+    /// The binary tree's order of the primitives: leaf runs index into it.
+    pub primitive_indices: Vec<u32>,
     /// Most entries a traversal's stack can hold at once (each node visited pushes its hit
-    /// children and pops one), or `usize::MAX` when the tree is not laid out parents first.
+    /// children and pops one).
     pub stack_need: usize,
 }
 
 impl WideBvh {
-    /// `leaf_base[i]`: where node `i`'s leaf children start in the caller's leaf array, which
-    /// holds every node's leaf children in node order, each node's by primitive offset.
-    pub fn new(bvh: &CwBvh, leaf_base: &[u32]) -> Self {
-        let nodes: Vec<WideNode> = bvh
-            .nodes
-            .iter()
-            .zip(leaf_base)
-            .map(|(n, &b)| WideNode::new(n, &std::array::from_fn(|c| n.child_aabb(c)), b))
-            .collect();
-        // need(node) = (children - 1) + max over inner children of need(child), over the
-        // nodes in reverse order (obvhs stores children after their parent; checked).
+    /// Collapses `bvh` (leaves of at most [`LEAF_SIZE`] primitives) into a [`WIDTH`]-wide tree,
+    /// nodes laid out depth first with siblings together.
+    pub fn new(bvh: Bvh2) -> Self {
+        let b2 = &bvh.nodes;
+        let mut nodes: Vec<WideNode> = Vec::new();
+        let mut leaves: Vec<(u32, u32)> = Vec::new();
+        let mut leaf = |n: &obvhs::bvh2::node::Bvh2Node| {
+            assert!(n.prim_count <= LEAF_SIZE, "obvhs made a leaf of {} primitives", n.prim_count);
+            leaves.push((n.first_index, n.prim_count));
+            LEAF | (leaves.len() as u32 - 1)
+        };
+        if b2.is_empty() {
+            return WideBvh { nodes, leaves, primitive_indices: bvh.primitive_indices, stack_need: 1 };
+        }
+        if b2[0].is_leaf() {
+            let only = leaf(&b2[0]);
+            nodes.push(WideNode::new(&[(b2[0].aabb, only)]));
+            return WideBvh { nodes, leaves, primitive_indices: bvh.primitive_indices, stack_need: 2 };
+        }
+        // (binary node, wide node to fill); every wide node is reserved when its parent is made.
+        nodes.push(WideNode::new(&[]));
+        let mut work = vec![(0usize, 0usize)];
+        let mut open: Vec<usize> = Vec::with_capacity(WIDTH);
+        while let Some((b, w)) = work.pop() {
+            open.clear();
+            let first = b2[b].first_index as usize;
+            open.extend([first, first + 1]);
+            // Open the largest inner child until the node is full.
+            while open.len() < WIDTH {
+                let largest = (0..open.len())
+                    .filter(|&i| !b2[open[i]].is_leaf())
+                    .max_by(|&i, &j| b2[open[i]].aabb.half_area().total_cmp(&b2[open[j]].aabb.half_area()));
+                let Some(i) = largest else { break };
+                let f = b2[open[i]].first_index as usize;
+                open[i] = f;
+                open.push(f + 1);
+            }
+            let mut children = [(Aabb::empty(), 0u32); WIDTH];
+            for (slot, &c) in children.iter_mut().zip(&open) {
+                let what = if b2[c].is_leaf() {
+                    leaf(&b2[c])
+                } else {
+                    nodes.push(WideNode::new(&[]));
+                    work.push((c, nodes.len() - 1));
+                    (nodes.len() - 1) as u32
+                };
+                *slot = (b2[c].aabb, what);
+            }
+            nodes[w] = WideNode::new(&children[..open.len()]);
+        }
+        // need(node) = (children - 1) + max over inner children of need(child), over the nodes
+        // in reverse order (children come after their parent).
         let mut need = vec![0usize; nodes.len()];
-        let mut ordered = true;
         for i in (0..nodes.len()).rev() {
             let n = &nodes[i];
-            let slots = (0..8).filter(|c| n.valid & (1 << c) != 0);
-            let mut deepest = 0;
-            for c in slots.clone() {
-                let child = n.children[c];
-                if child & LEAF == 0 {
-                    ordered &= child as usize > i && (child as usize) < nodes.len();
-                    deepest = deepest.max(need.get(child as usize).copied().unwrap_or(0));
-                }
-            }
+            let slots = (0..WIDTH).filter(|&c| n.planes[c / 4][0][c % 4] != f32::INFINITY);
+            let deepest = slots
+                .clone()
+                .filter(|&c| n.children[c] & LEAF == 0)
+                .map(|c| need[n.children[c] as usize])
+                .max()
+                .unwrap_or(0);
             need[i] = slots.count().saturating_sub(1) + deepest;
         }
-        let stack_need = if ordered { need.first().map_or(0, |n| n + 1) } else { usize::MAX };
-        WideBvh { nodes, stack_need }
+        WideBvh { stack_need: need[0] + 1, nodes, leaves, primitive_indices: bvh.primitive_indices }
     }
 }
 
@@ -170,53 +222,55 @@ impl WideBvh {
 mod tests {
     use super::*;
     use haze_core::Sampler;
-    use obvhs::aabb::Aabb;
-    use obvhs::cwbvh::builder::build_cwbvh;
-    use obvhs::ray::Ray;
+    use obvhs::bvh2::builder::build_bvh2;
     use obvhs::BvhBuildParams;
 
-    /// The decoded node test agrees with obvhs's on every node of a random tree for random rays,
-    /// up to rays that graze a box (where the two roundings may differ).
+    /// Every primitive sits in exactly one leaf, leaves hold 1 to `LEAF_SIZE` primitives, and each
+    /// child box encloses everything below it.
     #[test]
-    fn node_test_matches_obvhs() {
+    fn collapse_keeps_every_primitive_once_inside_its_boxes() {
         let mut s = Sampler::from_seed(11);
         let p = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
-        let boxes: Vec<Aabb> = (0..3000)
-            .map(|_| {
-                let c = p(&mut s);
-                Aabb::new(c, c + Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.5)
-            })
-            .collect();
-        let bvh = build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
-        let wide = WideBvh::new(&bvh, &vec![0; bvh.nodes.len()]);
-        let (mut hits, mut differ) = (0u32, 0u32);
-        for _ in 0..3000 {
-            let o = p(&mut s);
-            let d = Vec3A::from(haze_core::sampling::sample_uniform_sphere(s.next_2d()));
-            let t_max = s.next_1d() * 12.0;
-            let r = Ray::new(o, d, 0.0, t_max);
-            let oct = ((d.x >= 0.0) as u32 * 0x04040404)
-                | ((d.y >= 0.0) as u32 * 0x02020202)
-                | ((d.z >= 0.0) as u32 * 0x01010101);
-            let wr = WideRay::new(o, d, r.inv_direction, 1e-4);
-            for (n, w) in bvh.nodes.iter().zip(&wide.nodes) {
-                let theirs = n.intersect_ray(&r, oct);
-                let ours = w.intersect(&wr, t_max).0;
-                // obvhs's mask: inner child `c` at bit `24 + (c ^ octant)`, a leaf child as
-                // its run of primitive bits.
-                for c in 0..8 {
-                    let meta = u32::from(n.child_meta[c]);
-                    let hit = if n.imask & (1 << c) != 0 {
-                        theirs >> (24 + (c as u32 ^ (oct & 7))) & 1 != 0
-                    } else {
-                        theirs & ((meta >> 5) << (meta & 0b11111)) != 0
-                    };
-                    hits += u32::from(hit);
-                    differ += u32::from(hit != (ours >> c & 1 != 0));
+        for count in [1usize, 3, 5, 9, 40, 3000] {
+            let boxes: Vec<Aabb> = (0..count)
+                .map(|_| {
+                    let c = p(&mut s);
+                    Aabb::new(c, c + Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.5)
+                })
+                .collect();
+            let mut params = BvhBuildParams::slow_build();
+            params.pre_split = false;
+            params.max_prims_per_leaf = LEAF_SIZE;
+            let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()));
+            let mut seen = vec![0u32; count];
+            // (node or leaf, box of its parent's slot)
+            let mut work = vec![(0u32, Aabb::LARGEST)];
+            while let Some((x, outer)) = work.pop() {
+                let inside = |b: &Aabb| b.min.cmpge(outer.min).all() && b.max.cmple(outer.max).all();
+                if x & LEAF != 0 {
+                    let (first, n) = wide.leaves[(x & !LEAF) as usize];
+                    assert!((1..=LEAF_SIZE).contains(&n), "{n}");
+                    for &i in &wide.primitive_indices[first as usize..(first + n) as usize] {
+                        seen[i as usize] += 1;
+                        assert!(inside(&boxes[i as usize]));
+                    }
+                    continue;
+                }
+                let node = &wide.nodes[x as usize];
+                for c in 0..WIDTH {
+                    let lane = |pl: usize| node.planes[c / 4][pl][c % 4];
+                    if lane(0) == f32::INFINITY {
+                        continue;
+                    }
+                    let b = Aabb::new(
+                        Vec3A::new(lane(0), lane(2), lane(4)),
+                        Vec3A::new(lane(1), lane(3), lane(5)),
+                    );
+                    assert!(inside(&b));
+                    work.push((node.children[c], b));
                 }
             }
+            assert!(seen.iter().all(|&n| n == 1), "{count}: {seen:?}");
         }
-        assert!(hits > 20_000, "{hits}");
-        assert!(differ * 10_000 < hits, "{differ} of {hits} hit bits differ");
     }
 }
