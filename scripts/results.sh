@@ -59,7 +59,8 @@ METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:
   vrl_lightcuts:1000 vrl_lightcuts:1000,light_samples=4 vrl_lightcuts:10000 vpl_lightcuts:10000)
 WIDE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000)
 WHOLE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vpl_lightcuts:10000)
-PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000)
+PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000
+  vpl_lightcuts:10000,light_samples=4)
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
 DOC=${DOC:-docs/results.md}
