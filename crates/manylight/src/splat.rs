@@ -102,6 +102,9 @@ struct Target {
     r: f32,
 }
 
+/// Targets whose cones [`CausticTracer::sample_direction`] keeps on the stack.
+const CACHED_CONES: usize = 16;
+
 /// The caustic paths' sampler: the targets and the emitter probabilities, built once per scene.
 #[derive(Clone, Debug)]
 pub struct CausticTracer {
@@ -236,14 +239,25 @@ impl CausticTracer {
             let cos_max = (1.0 - t.r * t.r / d2).max(0.0).sqrt();
             (v / d2.sqrt(), cos_max, 2.0 * PI * (1.0 - cos_max))
         };
-        let total: f32 = self.targets.iter().map(|t| cone(t).2).sum();
+        // Each cone once, on the stack for the usual handful of targets (the three passes
+        // below read them); more targets recompute them.
+        let mut cached = [(Vec3::Z, 0.0f32, 0.0f32); CACHED_CONES];
+        let n = self.targets.len();
+        let fits = n <= CACHED_CONES;
+        if fits {
+            for (c, t) in cached.iter_mut().zip(&self.targets) {
+                *c = cone(t);
+            }
+        }
+        let cone_of = |k: usize| if fits { cached[k] } else { cone(&self.targets[k]) };
+        let total: f32 = (0..n).map(|k| cone_of(k).2).sum();
         if total.is_nan() || total <= 0.0 {
             return None;
         }
         let mut pick = u_pick * total;
-        let mut chosen = cone(&self.targets[self.targets.len() - 1]);
-        for t in &self.targets {
-            let c = cone(t);
+        let mut chosen = cone_of(n - 1);
+        for k in 0..n {
+            let c = cone_of(k);
             if pick < c.2 {
                 chosen = c;
                 break;
@@ -256,11 +270,9 @@ impl CausticTracer {
         } else {
             Frame::from_normal(axis).to_world(sample_uniform_cone(u, cos_max))
         };
-        let holding = self
-            .targets
-            .iter()
-            .filter(|t| {
-                let (axis, cos_max, _) = cone(t);
+        let holding = (0..n)
+            .filter(|&k| {
+                let (axis, cos_max, _) = cone_of(k);
                 cos_max <= -1.0 || d.dot(axis) >= cos_max
             })
             .count()
