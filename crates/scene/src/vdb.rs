@@ -84,27 +84,8 @@ pub enum VdbError {
 /// Reads the float grid `name` of the OpenVDB file `path` (see the module comment for the
 /// mapping). Errors say what is wrong; the caller adds the scene file, line and element.
 pub fn read_vdb(path: &Path, name: &str) -> Result<VdbGrid, VdbError> {
-    let bytes = read_bytes(path).map_err(VdbError::File)?;
+    let bytes = crate::volume::read_volume_file(path, MAX_VDB_FILE_BYTES, ".vdb").map_err(VdbError::File)?;
     parse_vdb(&bytes, name)
-}
-
-/// Reads a regular file (not a device or a pipe) of at most [`MAX_VDB_FILE_BYTES`].
-fn read_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
-    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
-    if !meta.is_file() {
-        return Err("not a regular file".into());
-    }
-    if meta.len() > MAX_VDB_FILE_BYTES {
-        return Err(format!(
-            "the file is {} bytes; haze reads .vdb files of at most {MAX_VDB_FILE_BYTES} bytes",
-            meta.len()
-        ));
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(MAX_VDB_FILE_BYTES).read_to_end(&mut bytes).map_err(|e| format!("cannot read: {e}"))?;
-    Ok(bytes)
 }
 
 /// The panic message of a caught panic.

@@ -70,6 +70,27 @@ pub struct Grid {
 /// Size of a `.vol` header in bytes.
 pub const VOL_HEADER_BYTES: usize = 48;
 
+/// The bytes of the volume file `path` (`kind`, e.g. ".vol", names it in messages): a regular
+/// file (not a device such as `/dev/zero` or a pipe) of at most `limit` bytes, read through that
+/// limit so that a file growing while it is read cannot exhaust memory either.
+pub(crate) fn read_volume_file(path: &Path, limit: u64, kind: &str) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > limit {
+        return Err(format!(
+            "the file is {} bytes; haze reads {kind} files of at most {limit} bytes",
+            meta.len()
+        ));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(limit).read_to_end(&mut bytes).map_err(|e| format!("cannot read: {e}"))?;
+    Ok(bytes)
+}
+
 impl Grid {
     /// A grid whose cell `(x, y, z)` channel `c` holds `f(x, y, z, c)`, in the `.vol` order
     /// (x fastest, then y, then z; channels interleaved).

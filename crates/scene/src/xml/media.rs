@@ -300,23 +300,9 @@ fn vdb_volume(
 /// Largest `.vol` file haze reads (as for mesh files, `docs/robustness.md`).
 const MAX_VOLUME_FILE_BYTES: u64 = 2 << 30;
 
-/// Reads a `.vol` file: a regular file (not a device such as `/dev/zero` or a pipe) of at most
-/// [`MAX_VOLUME_FILE_BYTES`], read through that limit.
+/// Reads a `.vol` file of at most [`MAX_VOLUME_FILE_BYTES`] (`volume::read_volume_file`).
 fn read_vol(path: &std::path::Path) -> Result<Grid, String> {
-    use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
-    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
-    if !meta.is_file() {
-        return Err("not a regular file".into());
-    }
-    if meta.len() > MAX_VOLUME_FILE_BYTES {
-        return Err(format!(
-            "the file is {} bytes; haze reads .vol files of at most {MAX_VOLUME_FILE_BYTES} bytes",
-            meta.len()
-        ));
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(MAX_VOLUME_FILE_BYTES).read_to_end(&mut bytes).map_err(|e| format!("cannot read: {e}"))?;
+    let bytes = crate::volume::read_volume_file(path, MAX_VOLUME_FILE_BYTES, ".vol")?;
     Grid::parse_vol(&bytes)
 }
 
