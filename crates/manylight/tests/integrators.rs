@@ -585,30 +585,17 @@ fn caustic_paths_match_the_camera_continuation_in_smoke() {
         caustic_paths: Some(caustic_paths),
         ..settings(&scene, paths)
     };
-    let paired_z = |a: &Passes, b: &Passes| {
-        let s = Component::Surface as usize;
-        let d: Vec<f64> = a
-            .pass_means
-            .iter()
-            .zip(&b.pass_means)
-            .map(|(x, y)| (x[s].iter().sum::<f64>() - y[s].iter().sum::<f64>()) / 3.0)
-            .collect();
-        let n = d.len() as f64;
-        let mean = d.iter().sum::<f64>() / n;
-        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-        mean / (var / n).sqrt()
-    };
     let continuation = render_passes(&scene, &VrlIntegrator::new(&scene, with(0), 1).unwrap(), passes, 16, 1);
     let mut splatting = VrlIntegrator::new(&scene, with(2000), 1).unwrap();
     let splats = render_passes(&scene, &splatting, passes, 16, 1);
     let (r, _) = compare(&splats, &continuation, Component::Surface);
-    let z = paired_z(&splats, &continuation);
+    let z = paired_z(&splats, &continuation, Component::Surface);
     let mut failures = Vec::new();
     judge(&mut failures, "smoke: caustic paths vs continuation (paired z)", &r, z, 0.01);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     splatting.caustic_scale = 1.2;
     let wrong = render_passes(&scene, &splatting, passes, 16, 1);
-    let z = paired_z(&wrong, &continuation);
+    let z = paired_z(&wrong, &continuation, Component::Surface);
     println!("smoke: caustic splats x 1.2: paired image-mean z = {z:.2}");
     assert!(z.abs() > 5.0, "20% too bright caustic splats in smoke went unnoticed: paired z = {z:.2}");
 }
