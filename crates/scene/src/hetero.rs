@@ -87,8 +87,8 @@ impl MajorantGrid {
         let global = cells.iter().fold(Rgb::ZERO, |m, c| m.max(*c));
         let mean_max =
             cells.iter().map(|c| c.max_component() as f64).sum::<f64>() / cells.len().max(1) as f64;
-        if cells.iter().all(|c| *c == cells[0]) || mean_max >= COLLAPSE_SHARE * global.max_component() as f64
-        {
+        // (A grid whose cells all have the same bound meets this with equality.)
+        if mean_max >= COLLAPSE_SHARE * global.max_component() as f64 {
             return MajorantGrid { lo, hi, res: [1; 3], cells: vec![global] };
         }
         MajorantGrid { lo, hi, res, cells }
