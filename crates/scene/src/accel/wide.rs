@@ -69,11 +69,16 @@ impl WideRay {
     /// the planes wrongly, so such a ray missed every box it started in.
     #[inline]
     pub fn new(o: Vec3A, inv_d: Vec3A, t_min: f32) -> Self {
-        let near = [0, 1, 2].map(|a| 2 * a + usize::from(inv_d[a] < 0.0));
+        // Written out: `[0, 1, 2].map(..)` here compiled to an out-of-line `try_map` call per
+        // query (8% of hg-box's CPU samples, whose rays test few nodes).
         WideRay {
-            near,
-            o: [0, 1, 2].map(|a| Vec4::splat(o[a])),
-            inv: [0, 1, 2].map(|a| Vec4::splat(inv_d[a])),
+            near: [
+                usize::from(inv_d.x < 0.0),
+                2 + usize::from(inv_d.y < 0.0),
+                4 + usize::from(inv_d.z < 0.0),
+            ],
+            o: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            inv: [Vec4::splat(inv_d.x), Vec4::splat(inv_d.y), Vec4::splat(inv_d.z)],
             t_min: Vec4::splat(t_min),
         }
     }
