@@ -1,7 +1,7 @@
 //! The scene the integrators render: camera, shapes, media, emitters, integrator settings, and
 //! ray queries through the acceleration structure.
 
-use crate::accel::{Accel, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
+use crate::accel::{Accel, PreliminaryHit, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::emitter_tables::EmitterTables;
@@ -95,6 +95,18 @@ impl Scene {
         self.accel.intersect(&self.shapes, ray)
     }
 
+    /// The closest hit of [`Self::intersect`] with only its distance computed
+    /// ([`Accel::intersect_preliminary`]); [`Self::interaction`] completes it.
+    pub fn intersect_preliminary(&self, ray: &Ray) -> Option<PreliminaryHit> {
+        self.accel.intersect_preliminary(ray)
+    }
+
+    /// The surface interaction of a hit from [`Self::intersect_preliminary`].
+    #[inline]
+    pub fn interaction(&self, hit: &PreliminaryHit) -> SurfaceInteraction {
+        self.accel.interaction(&self.shapes, hit)
+    }
+
     /// True if anything blocks `ray` before `ray.t_max`.
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(ray)
@@ -109,6 +121,12 @@ impl Scene {
     /// The surface interaction of a hit from [`Self::shadow_hits`].
     pub fn shadow_interaction(&self, hit: &ShadowHit) -> SurfaceInteraction {
         self.accel.shadow_interaction(&self.shapes, hit)
+    }
+
+    /// The shape and geometric normal of a hit from [`Self::shadow_hits`]
+    /// ([`Accel::shadow_crossing`]).
+    pub fn shadow_crossing(&self, hit: &ShadowHit) -> (u32, Vec3) {
+        self.accel.shadow_crossing(hit)
     }
 
     pub fn medium(&self, id: MediumId) -> &Medium {

@@ -130,13 +130,17 @@ fn transmittance_impl(
             }
         }
         last = h.t;
-        let si = scene.shadow_interaction(h);
-        let shape = &scene.shapes[si.shape as usize];
-        tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
+        let (shape, n) = scene.shadow_crossing(h);
+        let shape = &scene.shapes[shape as usize];
+        if !shape.bsdf.is_null() {
+            // A thin dielectric: its transmittance needs the shading normal and uv.
+            let si = scene.shadow_interaction(h);
+            tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
+        }
         if tr.is_black() {
             return Rgb::ZERO;
         }
-        medium = shape.medium_towards(ray.d, si.n, medium);
+        medium = shape.medium_towards(ray.d, n, medium);
     }
     if let Some(m) = medium {
         let med = scene.medium(m);

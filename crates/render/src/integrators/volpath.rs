@@ -91,8 +91,9 @@ impl Integrator for VolPath {
                 break;
             }
 
-            let hit = scene.intersect(&ray);
-            let t_surface = hit.map_or(ray.t_max, |h| h.t);
+            // The surface interaction only once the path reaches the surface (below).
+            let hit = scene.intersect_preliminary(&ray);
+            let t_surface = hit.map_or(ray.t_max, |h| h.t());
 
             if let Some(mid) = medium {
                 let med = scene.medium(mid);
@@ -162,7 +163,7 @@ impl Integrator for VolPath {
             let count_direct = depth == 0 || specular_chain;
             let visible = !(depth == 0 && self.hide_emitters);
 
-            let Some(h) = hit else {
+            let Some(h) = hit.map(|h| scene.interaction(&h)) else {
                 if visible {
                     // Each environment emitter is weighted against its own NEE pdf.
                     for (le, pdf) in scene.environment_emission(ray.d) {

@@ -99,6 +99,30 @@ pub struct ShadowHit {
 /// Most pass-through surfaces [`Accel::shadow_hits`] collects before it gives up.
 pub const MAX_SHADOW_HITS: usize = 8;
 
+/// The closest hit of a ray before its surface interaction is built
+/// ([`Accel::intersect_preliminary`]); [`Accel::interaction`] completes it.
+#[derive(Clone, Copy, Debug)]
+pub struct PreliminaryHit(Hit);
+
+#[derive(Clone, Copy, Debug)]
+enum Hit {
+    /// A triangle: its leaf, lane, distance and barycentrics.
+    Triangle { leaf: u32, lane: u32, t: f32, b1: f32, b2: f32 },
+    /// An analytic sphere or disk, whose interaction comes with its test.
+    Done(SurfaceInteraction),
+}
+
+impl PreliminaryHit {
+    /// Distance along the ray.
+    #[inline]
+    pub fn t(&self) -> f32 {
+        match self.0 {
+            Hit::Triangle { t, .. } => t,
+            Hit::Done(si) => si.t,
+        }
+    }
+}
+
 /// Outcome of [`Accel::shadow_hits`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowQuery {
@@ -415,9 +439,19 @@ impl Accel {
         (self.lo, self.hi)
     }
 
+    /// Closest hit with `t` in `(0, ray.t_max)`, as a complete surface interaction.
     pub fn intersect(&self, shapes: &[Shape], ray: &Ray) -> Option<SurfaceInteraction> {
+        self.intersect_preliminary(ray).map(|h| self.interaction(shapes, &h))
+    }
+
+    /// The closest hit of [`Self::intersect`], with only its distance computed: the rest
+    /// ([`Self::interaction`]: hit point, normals, uv) waits until the caller knows it needs
+    /// the surface. A path in a medium mostly scatters before the surface it would hit, and
+    /// then the interaction is never built (Mitsuba 3 splits its queries the same way,
+    /// `PreliminaryIntersection` and `compute_surface_interaction`).
+    pub fn intersect_preliminary(&self, ray: &Ray) -> Option<PreliminaryHit> {
         let mut t_max = ray.t_max;
-        let mut best: Option<SurfaceInteraction> = None;
+        let mut best: Option<PreliminaryHit> = None;
         if let Some(bvh) = &self.bvh {
             let o: Vec3A = ray.o.into();
             let d: Vec3A = ray.d.into();
@@ -448,7 +482,7 @@ impl Accel {
                 },
             );
             if let Some((leaf, lane, t, b1, b2)) = closest {
-                best = Some(self.triangle_interaction(shapes, leaf, lane, t, b1, b2));
+                best = Some(PreliminaryHit(Hit::Triangle { leaf, lane: lane as u32, t, b1, b2 }));
             }
         }
         for a in &self.analytic {
@@ -465,7 +499,15 @@ impl Accel {
                             phi * 0.5 * haze_core::INV_PI + 0.5,
                             n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI,
                         );
-                        best = Some(SurfaceInteraction { t, p, n, ns: n, uv, shape: *shape, prim: 0 });
+                        best = Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
+                            t,
+                            p,
+                            n,
+                            ns: n,
+                            uv,
+                            shape: *shape,
+                            prim: 0,
+                        })));
                     }
                 }
                 Analytic::Disk { shape, to_world, inv, normal } => {
@@ -473,7 +515,7 @@ impl Accel {
                         t_max = t;
                         let uv =
                             Vec2::new(local.length(), local.y.atan2(local.x) * 0.5 * haze_core::INV_PI + 0.5);
-                        best = Some(SurfaceInteraction {
+                        best = Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
                             t,
                             p: ray.at(t),
                             n: *normal,
@@ -481,12 +523,23 @@ impl Accel {
                             uv,
                             shape: *shape,
                             prim: 0,
-                        });
+                        })));
                     }
                 }
             }
         }
         best
+    }
+
+    /// The complete surface interaction of a hit from [`Self::intersect_preliminary`].
+    #[inline]
+    pub fn interaction(&self, shapes: &[Shape], h: &PreliminaryHit) -> SurfaceInteraction {
+        match h.0 {
+            Hit::Triangle { leaf, lane, t, b1, b2 } => {
+                self.triangle_interaction(shapes, leaf, lane as usize, t, b1, b2)
+            }
+            Hit::Done(si) => si,
+        }
     }
 
     fn triangle_interaction(
@@ -635,6 +688,15 @@ impl Accel {
     pub fn shadow_interaction(&self, shapes: &[Shape], h: &ShadowHit) -> SurfaceInteraction {
         self.triangle_interaction(shapes, h.tri / 4, (h.tri % 4) as usize, h.t, h.b1, h.b2)
     }
+
+    /// The shape and geometric normal of a hit from [`Self::shadow_hits`]: all a shadow ray
+    /// needs to cross a `null` surface (the medium it enters), read from the leaf without the
+    /// hit point, shading normal and uv of [`Self::shadow_interaction`] (`n` is the same vector).
+    pub fn shadow_crossing(&self, h: &ShadowHit) -> (u32, Vec3) {
+        let leaf = &self.leaves[(h.tri / 4) as usize];
+        let lane = (h.tri % 4) as usize;
+        (leaf.ids[lane].shape, leaf.normals[lane])
+    }
 }
 
 #[cfg(test)]
@@ -691,6 +753,73 @@ mod tests {
                 assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
             }
         }
+    }
+
+    /// `shadow_hits` on a scene of `null` meshes finds every triangle the segment crosses (the
+    /// brute-force set of `t`s), a blocking mesh stops it, and `shadow_crossing` names the same
+    /// shape and geometric normal as the full `shadow_interaction`; `intersect_preliminary`
+    /// has the distance of `intersect`.
+    #[test]
+    fn shadow_hits_and_crossings_match_brute_force() {
+        let mut s = Sampler::from_seed(9);
+        let mut meshes: Vec<Vec<[Vec3; 3]>> = vec![Vec::new(); 3];
+        for k in 0..60 {
+            let c = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0;
+            let e = |s: &mut Sampler| Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5);
+            meshes[k % 3].push([c + e(&mut s), c + e(&mut s), c + e(&mut s)]);
+        }
+        let mesh = |tris: &[[Vec3; 3]], flip: bool| {
+            let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+            let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+            Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, flip))
+        };
+        // Shapes 0 and 1 are null (one with flipped normals), shape 2 blocks.
+        let mut shapes = vec![shape(mesh(&meshes[0], false)), shape(mesh(&meshes[1], true))];
+        shapes.push(Shape {
+            bsdf: Bsdf::Diffuse { reflectance: crate::Texture::Constant(haze_core::Rgb::splat(0.5)) },
+            ..shape(mesh(&meshes[2], false))
+        });
+        let accel = Accel::build(&shapes);
+        let (mut clear, mut blocked) = (0, 0);
+        for _ in 0..3000 {
+            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0;
+            let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+            let ray = Ray { t_max: 0.2 + 2.0 * s.next_1d(), ..Ray::new(o, d) };
+            let wt = WatertightRay::new(o.into(), d.into());
+            let crossed = |tris: &[[Vec3; 3]]| -> Vec<f32> {
+                tris.iter()
+                    .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), T_MIN, ray.t_max))
+                    .map(|h| h.0)
+                    .collect()
+            };
+            let mut want: Vec<f32> = [&meshes[0], &meshes[1]].iter().flat_map(|m| crossed(m)).collect();
+            want.sort_by(f32::total_cmp);
+            let blocks = !crossed(&meshes[2]).is_empty();
+            let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];
+            match accel.shadow_hits(&shapes, &ray, &mut hits) {
+                ShadowQuery::Blocked => {
+                    assert!(blocks, "blocked without a blocker on the segment");
+                    blocked += 1;
+                }
+                ShadowQuery::Clear(n) => {
+                    assert!(!blocks, "a blocker on the segment was missed");
+                    let mut got: Vec<f32> = hits[..n].iter().map(|h| h.t).collect();
+                    got.sort_by(f32::total_cmp);
+                    assert_eq!(got, want);
+                    for h in &hits[..n] {
+                        let si = accel.shadow_interaction(&shapes, h);
+                        assert_eq!(accel.shadow_crossing(h), (si.shape, si.n));
+                        assert!(si.shape < 2);
+                    }
+                    clear += usize::from(n > 0);
+                }
+                ShadowQuery::Unsupported => assert!(want.len() >= MAX_SHADOW_HITS),
+            }
+            let full = accel.intersect(&shapes, &ray).map(|h| h.t);
+            assert_eq!(accel.intersect_preliminary(&ray).map(|h| h.t()), full);
+        }
+        // Both outcomes were exercised, with crossings.
+        assert!(clear > 50 && blocked > 50, "{clear} clear with crossings, {blocked} blocked");
     }
 
     /// The wide tree with its 4-triangle leaves returns exactly the brute-force closest hit
