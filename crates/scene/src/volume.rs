@@ -67,6 +67,9 @@ pub struct Grid {
     pub bbox: (Vec3, Vec3),
 }
 
+/// Largest `.vol` file haze reads (as for mesh files, `docs/robustness.md`).
+pub const MAX_VOLUME_FILE_BYTES: u64 = 2 << 30;
+
 /// Size of a `.vol` header in bytes.
 pub const VOL_HEADER_BYTES: usize = 48;
 
@@ -115,9 +118,11 @@ impl Grid {
 
     /// Reads a Mitsuba `.vol` file (format version 3, encoding 1 = float32, little endian;
     /// `docs/mitsuba-compat.md` has the layout). Errors name the file and what is wrong.
+    /// At most [`MAX_VOLUME_FILE_BYTES`] are read ([`read_volume_file`]); messages do not name
+    /// the file (the caller does, with the scene element).
     pub fn read_vol(path: &Path) -> Result<Grid, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
-        Grid::parse_vol(&bytes).map_err(|m| format!("'{}': {m}", path.display()))
+        let bytes = read_volume_file(path, MAX_VOLUME_FILE_BYTES, ".vol")?;
+        Grid::parse_vol(&bytes)
     }
 
     /// Parses the bytes of a `.vol` file; see [`Grid::read_vol`].

@@ -232,7 +232,8 @@ pub(super) fn volume(p: &Params, what: &str, range: (f32, f32), doc: &Document) 
     if is_vdb {
         return vdb_volume(p, &path, grid_name.unwrap_or("density"), what, range, filter, to_world);
     }
-    let grid = read_vol(&path).map_err(|m| p.error_at("filename", format!("'{}': {m}", path.display())))?;
+    let grid =
+        Grid::read_vol(&path).map_err(|m| p.error_at("filename", format!("'{}': {m}", path.display())))?;
     if let Some((cell, c, v)) = grid.first_outside(range.0, range.1) {
         return Err(p.error_at(
             "filename",
@@ -295,15 +296,6 @@ fn vdb_volume(
     let to_world = to_world * vdb.to_world;
     // Clamp: the padding ring is background, so every wrap mode reads the same (crate::vdb).
     Ok(Volume::new(VolumeData::Grid { grid: Arc::new(vdb.grid), filter, wrap: Wrap::Clamp }, to_world))
-}
-
-/// Largest `.vol` file haze reads (as for mesh files, `docs/robustness.md`).
-const MAX_VOLUME_FILE_BYTES: u64 = 2 << 30;
-
-/// Reads a `.vol` file of at most [`MAX_VOLUME_FILE_BYTES`] (`volume::read_volume_file`).
-fn read_vol(path: &std::path::Path) -> Result<Grid, String> {
-    let bytes = crate::volume::read_volume_file(path, MAX_VOLUME_FILE_BYTES, ".vol")?;
-    Grid::parse_vol(&bytes)
 }
 
 /// A volume's `to_world` as an affine map; it must be invertible and finite.
