@@ -35,7 +35,7 @@ mod watertight;
 mod wide;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
-use wide::{WideBvh, WideRay, LEAF, LEAF_SIZE, WIDTH};
+use wide::{Avx2, NodeTest, WideBvh, LEAF, LEAF_SIZE, WIDTH};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
@@ -182,6 +182,8 @@ pub struct Accel {
     analytic: Vec<Analytic>,
     lo: Vec3,
     hi: Vec3,
+    /// The 8-lane AVX2 node test when the CPU has it ([`Avx2::detect`]), else the portable one.
+    avx2: Option<Avx2>,
 }
 
 /// BVH build settings: obvhs' `slow_build` (wider PLOC search, more reinsertion: a tree that
@@ -292,7 +294,7 @@ impl Accel {
             let leaves = leaf_packets(&wide, &tris);
             (Some(wide), leaves)
         };
-        Accel { bvh, leaves, analytic, lo, hi }
+        Accel { bvh, leaves, analytic, lo, hi, avx2: Avx2::detect() }
     }
 
     /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
@@ -326,13 +328,22 @@ impl Accel {
             large.resize(wide.stack_need.min(wide.nodes.len() * WIDTH + 1), Entry::default());
             &mut large
         };
-        // One call site, so that `test` is inlined into the loop.
-        self.traverse_with::<ORDERED>(wide, o, d, t_max, stack, test);
+        // The node test is chosen once per query, not per node: with AVX2 the whole loop, its
+        // leaf test included, runs inside one AVX2-enabled function (`wide::Avx2::run`).
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.traverse_with::<ORDERED, _>(k, wide, o, d, t_max, stack, test),
+            ),
+            None => self.traverse_with::<ORDERED, _>(wide::Sse, wide, o, d, t_max, stack, test),
+        }
     }
 
     #[inline(always)]
-    fn traverse_with<const ORDERED: bool>(
+    #[allow(clippy::too_many_arguments)]
+    fn traverse_with<const ORDERED: bool, K: NodeTest>(
         &self,
+        kernel: K,
         wide: &WideBvh,
         o: Vec3A,
         d: Vec3A,
@@ -341,7 +352,7 @@ impl Accel {
         mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-        let ray = WideRay::new(o, inv, 0.0);
+        let ray = kernel.ray(o, inv, 0.0);
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
@@ -353,7 +364,7 @@ impl Accel {
                 }
             } else {
                 let node = &wide.nodes[cur as usize];
-                let (mut mask, entry) = node.intersect(&ray, t_max);
+                let (mut mask, t_near) = kernel.intersect(node, &ray, t_max);
                 if mask != 0 {
                     let c = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -365,7 +376,6 @@ impl Accel {
                     // and taken next. The others are popped in any order but each still
                     // pruned by its entry distance (a full insertion sort cost more in branch
                     // mispredictions than it saved in visits, measured).
-                    let t_near: [f32; WIDTH] = std::array::from_fn(|c| entry[c / 4][c % 4]);
                     let mut best = sp;
                     let mut best_t = t_near[c];
                     stack[sp] = Entry { node: node.children[c], t: best_t };
@@ -422,6 +432,7 @@ impl Accel {
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(t_max),
+                #[inline(always)]
                 |index, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                     let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
@@ -535,6 +546,7 @@ impl Accel {
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(ray.t_max),
+                #[inline(always)]
                 |_, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                     if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
@@ -594,6 +606,7 @@ impl Accel {
             o - d * ORIGIN_BACKOFF,
             d,
             shifted(ray.t_max),
+            #[inline(always)]
             |index, leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                 let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
