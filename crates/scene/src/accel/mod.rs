@@ -651,6 +651,25 @@ mod tests {
         Shape { name: "s".into(), geometry, bsdf: Bsdf::Null, interior: None, exterior: None, emitter: None }
     }
 
+    /// The node tests to run: the portable one, and the AVX2 one where the CPU has it.
+    fn kernels() -> Vec<Option<Avx2>> {
+        [None].into_iter().chain(Avx2::detect().map(Some)).collect()
+    }
+
+    /// What a ray's queries return, to compare the kernels bit for bit: the closest hit's `t`,
+    /// primitive and point, and the shadow query's answer with its hits' `t`.
+    fn answers(accel: &Accel, shapes: &[Shape], ray: &Ray) -> (Option<(u32, u32, [u32; 3])>, bool, String) {
+        let h =
+            accel.intersect(shapes, ray).map(|h| (h.t.to_bits(), h.prim, h.p.to_array().map(f32::to_bits)));
+        let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];
+        let q = accel.shadow_hits(shapes, ray, &mut hits);
+        let ts: Vec<u32> = match q {
+            ShadowQuery::Clear(n) => hits[..n].iter().map(|h| h.t.to_bits()).collect(),
+            _ => Vec::new(),
+        };
+        (h, accel.occluded(ray), format!("{q:?} {ts:?}"))
+    }
+
     /// The BVH agrees with a brute-force loop over all triangles on random rays.
     #[test]
     fn bvh_matches_brute_force() {
@@ -677,6 +696,7 @@ mod tests {
         if deep_stack {
             accel.bvh.as_mut().unwrap().stack_need = usize::MAX;
         }
+        let kernels = kernels();
         for _ in 0..2000 {
             let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * scale;
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
@@ -687,11 +707,21 @@ mod tests {
                 .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), 1e-7, f32::INFINITY))
                 .map(|h| h.0)
                 .fold(f32::INFINITY, f32::min);
-            let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
-            assert!(got == brute || (got - brute).abs() < 1e-5 * brute, "{got} vs {brute}");
-            assert!(!accel.occluded(&Ray { t_max: brute, ..ray }));
-            if brute.is_finite() {
-                assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
+            let mut first = None;
+            for &k in &kernels {
+                accel.avx2 = k;
+                let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
+                assert!(got == brute || (got - brute).abs() < 1e-5 * brute, "{got} vs {brute}");
+                assert!(!accel.occluded(&Ray { t_max: brute, ..ray }));
+                if brute.is_finite() {
+                    assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
+                }
+                // Both kernels bit for bit alike, here and on a segment ending near the hit.
+                let a = (
+                    answers(&accel, &shapes, &ray),
+                    answers(&accel, &shapes, &Ray { t_max: brute * 0.999, ..ray }),
+                );
+                assert_eq!(*first.get_or_insert_with(|| a.clone()), a, "{k:?}");
             }
         }
     }
@@ -701,6 +731,7 @@ mod tests {
     /// rays starting on a triangle (hits at `t` near 0), rays grazing a tessellated plane (in
     /// its plane, or a hair above or below it), and axis-aligned rays whose zero components
     /// are `-0.0` (their inverse is `-1 / f32::EPSILON`: the near plane must follow its sign).
+    /// With both node tests where the CPU has AVX2, which must agree bit for bit.
     #[test]
     fn wide_tree_matches_brute_force_on_surfaces_and_grazing_rays() {
         let mut s = Sampler::from_seed(5);
@@ -724,7 +755,8 @@ mod tests {
         let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
         let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
         let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
-        let accel = Accel::build(&shapes);
+        let mut accel = Accel::build(&shapes);
+        let kernels = kernels();
         let (mut found, mut cases) = (0, 0);
         for i in 0..6000 {
             let (o, d) = match i % 3 {
@@ -763,13 +795,23 @@ mod tests {
                 .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), T_MIN, f32::INFINITY))
                 .map(|h| h.0)
                 .fold(f32::INFINITY, f32::min);
-            let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
-            assert_eq!(got.to_bits(), brute.to_bits(), "case {i}: o {o}, d {d}: {got} vs {brute}");
-            assert!(!accel.occluded(&Ray { t_max: brute, ..ray }), "case {i}");
-            if brute.is_finite() {
-                assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }), "case {i}");
-                found += 1;
+            let mut first = None;
+            for &k in &kernels {
+                accel.avx2 = k;
+                let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
+                assert_eq!(
+                    got.to_bits(),
+                    brute.to_bits(),
+                    "case {i} ({k:?}): o {o}, d {d}: {got} vs {brute}"
+                );
+                assert!(!accel.occluded(&Ray { t_max: brute, ..ray }), "case {i} ({k:?})");
+                if brute.is_finite() {
+                    assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }), "case {i} ({k:?})");
+                }
+                let a = answers(&accel, &shapes, &ray);
+                assert_eq!(*first.get_or_insert_with(|| a.clone()), a, "case {i} ({k:?})");
             }
+            found += usize::from(brute.is_finite());
             cases += 1;
         }
         // Enough hits to mean something, and enough misses to check for false hits.

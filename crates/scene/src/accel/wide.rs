@@ -390,6 +390,71 @@ mod tests {
     use obvhs::bvh2::builder::build_bvh2;
     use obvhs::BvhBuildParams;
 
+    /// The AVX2 node test gives the portable test's mask and entry distances bit for bit, on
+    /// random nodes of 1 to 8 boxes (some flat, where a ray's entry equals its exit, so `<`
+    /// instead of `<=` would fail) and rays with `±0` direction components. Skipped, with one
+    /// line, where the CPU has no AVX2.
+    #[test]
+    fn avx2_node_test_matches_the_portable_one_bit_for_bit() {
+        let Some(avx) = Avx2::detect() else {
+            eprintln!("skipped: no AVX2 on this CPU (or HAZE_FORCE_SSE is set)");
+            return;
+        };
+        let mut s = Sampler::from_seed(17);
+        let (mut hit_lanes, mut touching, mut missed) = (0, 0, 0);
+        for i in 0..20_000 {
+            let r = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
+            let count = 1 + i % WIDTH;
+            let boxes: Vec<(Aabb, u32)> = (0..count)
+                .map(|c| {
+                    let lo = r(&mut s) * 4.0;
+                    let mut hi = lo + r(&mut s) * 2.0;
+                    // Flat in one axis for every third box.
+                    if c % 3 == 0 {
+                        hi[c % 3] = lo[c % 3];
+                    }
+                    (Aabb::new(lo, hi), c as u32 + 1)
+                })
+                .collect();
+            let node = WideNode::new(&boxes);
+            let o = r(&mut s) * 6.0 - Vec3A::ONE;
+            // Aimed near the centre of one of the boxes, so that many lanes are hit.
+            let aim = boxes[i % count].0.center() + (r(&mut s) - Vec3A::splat(0.5)) * 0.5;
+            let mut d = (aim - o).normalize_or(Vec3A::X);
+            // A zero component (either sign) in a quarter of the rays.
+            if i % 4 == 0 {
+                d[(i / 4) % 3] = if i % 8 == 0 { 0.0 } else { -0.0 };
+            }
+            let inv = Vec3A::new(
+                obvhs::ray::safe_inverse(d.x),
+                obvhs::ray::safe_inverse(d.y),
+                obvhs::ray::safe_inverse(d.z),
+            );
+            let t_max = if i % 5 == 0 { f32::INFINITY } else { s.next_1d() * 8.0 };
+            let t_min = if i % 7 == 0 { s.next_1d() } else { 0.0 };
+            let (m_sse, e_sse) = Sse.intersect(&node, &Sse.ray(o, inv, t_min), t_max);
+            let (m_avx, e_avx) = avx.intersect(&node, &avx.ray(o, inv, t_min), t_max);
+            assert_eq!(m_sse, m_avx, "case {i}");
+            for c in 0..WIDTH {
+                if m_sse & (1 << c) != 0 {
+                    assert_eq!(e_sse[c].to_bits(), e_avx[c].to_bits(), "case {i}, lane {c}");
+                    hit_lanes += 1;
+                    // Entry equal to exit: recompute the exit of lane c.
+                    let exit = (0..3)
+                        .map(|a| {
+                            let far = if inv[a] < 0.0 { boxes[c].0.min[a] } else { boxes[c].0.max[a] };
+                            (far - o[a]) * inv[a]
+                        })
+                        .fold(t_max, f32::min);
+                    touching += usize::from(exit == e_sse[c]);
+                } else if c < count {
+                    missed += 1;
+                }
+            }
+        }
+        assert!(hit_lanes > 5_000 && missed > 5_000 && touching > 100, "{hit_lanes} {missed} {touching}");
+    }
+
     /// Every primitive sits in exactly one leaf, leaves hold 1 to `LEAF_SIZE` primitives, and each
     /// child box encloses everything below it.
     #[test]
