@@ -311,8 +311,9 @@ impl Accel {
     /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal and per-query
     /// costs").
     #[inline(always)]
-    fn traverse<const ORDERED: bool>(
+    fn traverse<const ORDERED: bool, K: NodeTest>(
         &self,
+        kernel: K,
         wide: &WideBvh,
         o: Vec3A,
         d: Vec3A,
@@ -328,15 +329,8 @@ impl Accel {
             large.resize(wide.stack_need.min(wide.nodes.len() * WIDTH + 1), Entry::default());
             &mut large
         };
-        // The node test is chosen once per query, not per node: with AVX2 the whole loop, its
-        // leaf test included, runs inside one AVX2-enabled function (`wide::Avx2::run`).
-        match self.avx2 {
-            Some(k) => k.run(
-                #[inline(always)]
-                || self.traverse_with::<ORDERED, _>(k, wide, o, d, t_max, stack, test),
-            ),
-            None => self.traverse_with::<ORDERED, _>(wide::Sse, wide, o, d, t_max, stack, test),
-        }
+        // One call site, so that `test` is inlined into the loop.
+        self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, stack, test);
     }
 
     #[inline(always)]
@@ -415,7 +409,26 @@ impl Accel {
         (self.lo, self.hi)
     }
 
+    /// The closest hit along `ray`.
     pub fn intersect(&self, shapes: &[Shape], ray: &Ray) -> Option<SurfaceInteraction> {
+        // The node test is chosen once per query, not per node: with AVX2 the whole query, its
+        // traversal loop and leaf tests included, runs inside one AVX2-enabled function.
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.intersect_with(k, shapes, ray),
+            ),
+            None => self.intersect_with(wide::Sse, shapes, ray),
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_with<K: NodeTest>(
+        &self,
+        kernel: K,
+        shapes: &[Shape],
+        ray: &Ray,
+    ) -> Option<SurfaceInteraction> {
         let mut t_max = ray.t_max;
         let mut best: Option<SurfaceInteraction> = None;
         if let Some(bvh) = &self.bvh {
@@ -427,7 +440,8 @@ impl Accel {
             // The closest hit so far, kept here in the real parametrisation; the traversal only
             // sees the shifted distances, for pruning.
             let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
-            self.traverse::<true>(
+            self.traverse::<true, K>(
+                kernel,
                 bvh,
                 o - d * ORIGIN_BACKOFF,
                 d,
@@ -536,12 +550,24 @@ impl Accel {
     }
 
     pub fn occluded(&self, ray: &Ray) -> bool {
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.occluded_with(k, ray),
+            ),
+            None => self.occluded_with(wide::Sse, ray),
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_with<K: NodeTest>(&self, kernel: K, ray: &Ray) -> bool {
         if let Some(bvh) = &self.bvh {
             let o: Vec3A = ray.o.into();
             let d: Vec3A = ray.d.into();
             let mut wt: Option<WatertightRay> = None;
             let mut blocked = false;
-            self.traverse::<false>(
+            self.traverse::<false, K>(
+                kernel,
                 bvh,
                 o - d * ORIGIN_BACKOFF,
                 d,
@@ -577,6 +603,23 @@ impl Accel {
         ray: &Ray,
         hits: &mut [ShadowHit; MAX_SHADOW_HITS],
     ) -> ShadowQuery {
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.shadow_hits_with(k, shapes, ray, hits),
+            ),
+            None => self.shadow_hits_with(wide::Sse, shapes, ray, hits),
+        }
+    }
+
+    #[inline(always)]
+    fn shadow_hits_with<K: NodeTest>(
+        &self,
+        kernel: K,
+        shapes: &[Shape],
+        ray: &Ray,
+        hits: &mut [ShadowHit; MAX_SHADOW_HITS],
+    ) -> ShadowQuery {
         for a in &self.analytic {
             let (shape, t) = match a {
                 Analytic::Sphere { shape, center, radius, .. } => {
@@ -601,7 +644,8 @@ impl Accel {
         let mut blocked = false;
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
-        self.traverse::<false>(
+        self.traverse::<false, K>(
+            kernel,
             bvh,
             o - d * ORIGIN_BACKOFF,
             d,
