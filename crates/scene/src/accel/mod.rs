@@ -6,7 +6,9 @@
 //! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide tree traversal reads
 //! and the traversal are ours (docs/performance.md, "Traversal of the peer scenes", "Front-to-back
 //! traversal and per-query costs" and "issue 17, fourth part"): [`wide`] collapses the binary
-//! tree into nodes of 8 f32 child boxes tested at once in SSE lanes, the loop
+//! tree into nodes of 8 f32 child boxes tested at once (in one AVX2 vector per plane where the
+//! CPU has AVX2, detected when the `Accel` is built, else in two SSE vectors: "issue 17, fifth
+//! part"), the loop
 //! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
 //! entry distance, and each leaf's 1-4 triangles are tested at once in SSE lanes
 //! ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
@@ -329,7 +331,10 @@ impl Accel {
             large.resize(wide.stack_need.min(wide.nodes.len() * WIDTH + 1), Entry::default());
             &mut large
         };
-        // One call site, so that `test` is inlined into the loop.
+        // One call site per kernel, so that `test` is inlined into the loop. The leaf tests
+        // (and `Avx2::run`'s closures) are `#[inline(always)]`: compiled into both kernels'
+        // copies of the loop, rustc otherwise left them out of line (the binary's symbols),
+        // and then out of the AVX2 function.
         self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, stack, test);
     }
 

@@ -1,7 +1,7 @@
 //! A wide BVH collapsed from obvhs's binary tree: nodes of [`WIDTH`] children whose boxes are
-//! stored as f32 planes in SSE lanes (structure of arrays), tested all at once, and each child
-//! slot naming its inner node or leaf directly, for our traversal loop (`Accel::traverse` in
-//! `mod.rs`).
+//! stored as f32 planes of 8 lanes (structure of arrays), tested all at once by a [`NodeTest`]
+//! ([`Avx2`] where the CPU has it, else the portable [`Sse`]), and each child slot naming its
+//! inner node or leaf directly, for our traversal loop (`Accel::traverse` in `mod.rs`).
 //!
 //! obvhs builds the binary tree (PLOC, reinsertion, and its SAH leaf collapse into leaves of up
 //! to [`LEAF_SIZE`] triangles: `obvhs::bvh2::builder::build_bvh2`); [`WideBvh::new`] turns it
