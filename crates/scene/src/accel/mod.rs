@@ -6,7 +6,9 @@
 //! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide tree traversal reads
 //! and the traversal are ours (docs/performance.md, "Traversal of the peer scenes", "Front-to-back
 //! traversal and per-query costs" and "issue 17, fourth part"): [`wide`] collapses the binary
-//! tree into nodes of 8 f32 child boxes tested at once in SSE lanes, the loop
+//! tree into nodes of 8 f32 child boxes tested at once (in one AVX2 vector per plane where the
+//! CPU has AVX2, detected when the `Accel` is built, else in two SSE vectors: "issue 17, fifth
+//! part"), the loop
 //! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
 //! entry distance, and each leaf's 1-4 triangles are tested at once in SSE lanes
 //! ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
@@ -35,7 +37,7 @@ mod watertight;
 mod wide;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
-use wide::{WideBvh, WideRay, LEAF, LEAF_SIZE, WIDTH};
+use wide::{Avx2, NodeTest, WideBvh, LEAF, LEAF_SIZE, WIDTH};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
@@ -207,6 +209,8 @@ pub struct Accel {
     analytic: Vec<Analytic>,
     lo: Vec3,
     hi: Vec3,
+    /// The 8-lane AVX2 node test when the CPU has it ([`Avx2::detect`]), else the portable one.
+    avx2: Option<Avx2>,
 }
 
 /// BVH build settings: obvhs' `slow_build` (wider PLOC search, more reinsertion: a tree that
@@ -317,7 +321,7 @@ impl Accel {
             let leaves = leaf_packets(&wide, &tris);
             (Some(wide), leaves)
         };
-        Accel { bvh, leaves, analytic, lo, hi }
+        Accel { bvh, leaves, analytic, lo, hi, avx2: Avx2::detect() }
     }
 
     /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
@@ -334,8 +338,9 @@ impl Accel {
     /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal and per-query
     /// costs").
     #[inline(always)]
-    fn traverse<const ORDERED: bool>(
+    fn traverse<const ORDERED: bool, K: NodeTest>(
         &self,
+        kernel: K,
         wide: &WideBvh,
         o: Vec3A,
         d: Vec3A,
@@ -353,13 +358,18 @@ impl Accel {
             large.resize(wide.stack_need.min(wide.nodes.len() * WIDTH + 1), MaybeUninit::uninit());
             &mut large
         };
-        // One call site, so that `test` is inlined into the loop.
-        self.traverse_with::<ORDERED>(wide, o, d, t_max, stack, test);
+        // One call site per kernel, so that `test` is inlined into the loop. The leaf tests
+        // (and `Avx2::run`'s closures) are `#[inline(always)]`: compiled into both kernels'
+        // copies of the loop, rustc otherwise left them out of line (the binary's symbols),
+        // and then out of the AVX2 function.
+        self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, stack, test);
     }
 
     #[inline(always)]
-    fn traverse_with<const ORDERED: bool>(
+    #[allow(clippy::too_many_arguments)]
+    fn traverse_with<const ORDERED: bool, K: NodeTest>(
         &self,
+        kernel: K,
         wide: &WideBvh,
         o: Vec3A,
         d: Vec3A,
@@ -368,7 +378,7 @@ impl Accel {
         mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
         let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
-        let ray = WideRay::new(o, inv, 0.0);
+        let ray = kernel.ray(o, inv, 0.0);
         // Entries `0..sp` are always initialised: each push writes `stack[sp]` before `sp`
         // grows, and every read below is of an index `< sp` (or `== sp` just after a push).
         let read = |stack: &[MaybeUninit<Entry>], i: usize| {
@@ -386,7 +396,7 @@ impl Accel {
                 }
             } else {
                 let node = &wide.nodes[cur as usize];
-                let (mut mask, entry) = node.intersect(&ray, t_max);
+                let (mut mask, t_near) = kernel.intersect(node, &ray, t_max);
                 if mask != 0 {
                     let c = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -398,7 +408,6 @@ impl Accel {
                     // and taken next. The others are popped in any order but each still
                     // pruned by its entry distance (a full insertion sort cost more in branch
                     // mispredictions than it saved in visits, measured).
-                    let t_near: [f32; WIDTH] = std::array::from_fn(|c| entry[c / 4][c % 4]);
                     let mut best = sp;
                     let mut best_t = t_near[c];
                     stack[sp] = MaybeUninit::new(Entry { node: node.children[c], t: best_t });
@@ -450,6 +459,19 @@ impl Accel {
     /// then the interaction is never built (Mitsuba 3 splits its queries the same way,
     /// `PreliminaryIntersection` and `compute_surface_interaction`).
     pub fn intersect_preliminary(&self, ray: &Ray) -> Option<PreliminaryHit> {
+        // The node test is chosen once per query, not per node: with AVX2 the whole query, its
+        // traversal loop and leaf tests included, runs inside one AVX2-enabled function.
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.intersect_with(k, ray),
+            ),
+            None => self.intersect_with(wide::Sse, ray),
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_with<K: NodeTest>(&self, kernel: K, ray: &Ray) -> Option<PreliminaryHit> {
         let mut t_max = ray.t_max;
         let mut best: Option<PreliminaryHit> = None;
         if let Some(bvh) = &self.bvh {
@@ -461,11 +483,13 @@ impl Accel {
             // The closest hit so far, kept here in the real parametrisation; the traversal only
             // sees the shifted distances, for pruning.
             let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
-            self.traverse::<true>(
+            self.traverse::<true, K>(
+                kernel,
                 bvh,
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(t_max),
+                #[inline(always)]
                 |index, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                     let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
@@ -588,16 +612,29 @@ impl Accel {
     }
 
     pub fn occluded(&self, ray: &Ray) -> bool {
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.occluded_with(k, ray),
+            ),
+            None => self.occluded_with(wide::Sse, ray),
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_with<K: NodeTest>(&self, kernel: K, ray: &Ray) -> bool {
         if let Some(bvh) = &self.bvh {
             let o: Vec3A = ray.o.into();
             let d: Vec3A = ray.d.into();
             let mut wt: Option<WatertightRay> = None;
             let mut blocked = false;
-            self.traverse::<false>(
+            self.traverse::<false, K>(
+                kernel,
                 bvh,
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(ray.t_max),
+                #[inline(always)]
                 |_, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                     if wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max).mask != 0 {
@@ -628,6 +665,23 @@ impl Accel {
         ray: &Ray,
         hits: &mut [ShadowHit; MAX_SHADOW_HITS],
     ) -> ShadowQuery {
+        match self.avx2 {
+            Some(k) => k.run(
+                #[inline(always)]
+                || self.shadow_hits_with(k, shapes, ray, hits),
+            ),
+            None => self.shadow_hits_with(wide::Sse, shapes, ray, hits),
+        }
+    }
+
+    #[inline(always)]
+    fn shadow_hits_with<K: NodeTest>(
+        &self,
+        kernel: K,
+        shapes: &[Shape],
+        ray: &Ray,
+        hits: &mut [ShadowHit; MAX_SHADOW_HITS],
+    ) -> ShadowQuery {
         for a in &self.analytic {
             let (shape, t) = match a {
                 Analytic::Sphere { shape, center, radius, .. } => {
@@ -652,11 +706,13 @@ impl Accel {
         let mut blocked = false;
         // The same back-off and real-parametrisation tests as `intersect` and `occluded` (the
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
-        self.traverse::<false>(
+        self.traverse::<false, K>(
+            kernel,
             bvh,
             o - d * ORIGIN_BACKOFF,
             d,
             shifted(ray.t_max),
+            #[inline(always)]
             |index, leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
                 let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
@@ -710,6 +766,25 @@ mod tests {
         Shape { name: "s".into(), geometry, bsdf: Bsdf::Null, interior: None, exterior: None, emitter: None }
     }
 
+    /// The node tests to run: the portable one, and the AVX2 one where the CPU has it.
+    fn kernels() -> Vec<Option<Avx2>> {
+        [None].into_iter().chain(Avx2::detect().map(Some)).collect()
+    }
+
+    /// What a ray's queries return, to compare the kernels bit for bit: the closest hit's `t`,
+    /// primitive and point, and the shadow query's answer with its hits' `t`.
+    fn answers(accel: &Accel, shapes: &[Shape], ray: &Ray) -> String {
+        let h =
+            accel.intersect(shapes, ray).map(|h| (h.t.to_bits(), h.prim, h.p.to_array().map(f32::to_bits)));
+        let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];
+        let q = accel.shadow_hits(shapes, ray, &mut hits);
+        let ts: Vec<u32> = match q {
+            ShadowQuery::Clear(n) => hits[..n].iter().map(|h| h.t.to_bits()).collect(),
+            _ => Vec::new(),
+        };
+        format!("{h:?} {} {q:?} {ts:?}", accel.occluded(ray))
+    }
+
     /// The BVH agrees with a brute-force loop over all triangles on random rays.
     #[test]
     fn bvh_matches_brute_force() {
@@ -736,6 +811,7 @@ mod tests {
         if deep_stack {
             accel.bvh.as_mut().unwrap().stack_need = usize::MAX;
         }
+        let kernels = kernels();
         for _ in 0..2000 {
             let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * scale;
             let d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
@@ -746,11 +822,21 @@ mod tests {
                 .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), 1e-7, f32::INFINITY))
                 .map(|h| h.0)
                 .fold(f32::INFINITY, f32::min);
-            let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
-            assert!(got == brute || (got - brute).abs() < 1e-5 * brute, "{got} vs {brute}");
-            assert!(!accel.occluded(&Ray { t_max: brute, ..ray }));
-            if brute.is_finite() {
-                assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
+            let mut first = None;
+            for &k in &kernels {
+                accel.avx2 = k;
+                let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
+                assert!(got == brute || (got - brute).abs() < 1e-5 * brute, "{got} vs {brute}");
+                assert!(!accel.occluded(&Ray { t_max: brute, ..ray }));
+                if brute.is_finite() {
+                    assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
+                }
+                // Both kernels bit for bit alike, here and on a segment ending near the hit.
+                let a = (
+                    answers(&accel, &shapes, &ray),
+                    answers(&accel, &shapes, &Ray { t_max: brute * 0.999, ..ray }),
+                );
+                assert_eq!(*first.get_or_insert_with(|| a.clone()), a, "{k:?}");
             }
         }
     }
@@ -827,6 +913,7 @@ mod tests {
     /// rays starting on a triangle (hits at `t` near 0), rays grazing a tessellated plane (in
     /// its plane, or a hair above or below it), and axis-aligned rays whose zero components
     /// are `-0.0` (their inverse is `-1 / f32::EPSILON`: the near plane must follow its sign).
+    /// With both node tests where the CPU has AVX2, which must agree bit for bit.
     #[test]
     fn wide_tree_matches_brute_force_on_surfaces_and_grazing_rays() {
         let mut s = Sampler::from_seed(5);
@@ -850,7 +937,8 @@ mod tests {
         let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
         let indices = (0..tris.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
         let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
-        let accel = Accel::build(&shapes);
+        let mut accel = Accel::build(&shapes);
+        let kernels = kernels();
         let (mut found, mut cases) = (0, 0);
         for i in 0..6000 {
             let (o, d) = match i % 3 {
@@ -889,13 +977,23 @@ mod tests {
                 .filter_map(|t| wt.intersect(t[0].into(), t[1].into(), t[2].into(), T_MIN, f32::INFINITY))
                 .map(|h| h.0)
                 .fold(f32::INFINITY, f32::min);
-            let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
-            assert_eq!(got.to_bits(), brute.to_bits(), "case {i}: o {o}, d {d}: {got} vs {brute}");
-            assert!(!accel.occluded(&Ray { t_max: brute, ..ray }), "case {i}");
-            if brute.is_finite() {
-                assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }), "case {i}");
-                found += 1;
+            let mut first = None;
+            for &k in &kernels {
+                accel.avx2 = k;
+                let got = accel.intersect(&shapes, &ray).map_or(f32::INFINITY, |h| h.t);
+                assert_eq!(
+                    got.to_bits(),
+                    brute.to_bits(),
+                    "case {i} ({k:?}): o {o}, d {d}: {got} vs {brute}"
+                );
+                assert!(!accel.occluded(&Ray { t_max: brute, ..ray }), "case {i} ({k:?})");
+                if brute.is_finite() {
+                    assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }), "case {i} ({k:?})");
+                }
+                let a = answers(&accel, &shapes, &ray);
+                assert_eq!(*first.get_or_insert_with(|| a.clone()), a, "case {i} ({k:?})");
             }
+            found += usize::from(brute.is_finite());
             cases += 1;
         }
         // Enough hits to mean something, and enough misses to check for false hits.

@@ -1,7 +1,7 @@
 //! A wide BVH collapsed from obvhs's binary tree: nodes of [`WIDTH`] children whose boxes are
-//! stored as f32 planes in SSE lanes (structure of arrays), tested all at once, and each child
-//! slot naming its inner node or leaf directly, for our traversal loop (`Accel::traverse` in
-//! `mod.rs`).
+//! stored as f32 planes of 8 lanes (structure of arrays), tested all at once by a [`NodeTest`]
+//! ([`Avx2`] where the CPU has it, else the portable [`Sse`]), and each child slot naming its
+//! inner node or leaf directly, for our traversal loop (`Accel::traverse` in `mod.rs`).
 //!
 //! obvhs builds the binary tree (PLOC, reinsertion, and its SAH leaf collapse into leaves of up
 //! to [`LEAF_SIZE`] triangles: `obvhs::bvh2::builder::build_bvh2`); [`WideBvh::new`] turns it
@@ -22,7 +22,7 @@ use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
-/// Children per node: lanes of the node test, in groups of 4 ([`HALVES`] SSE vectors per plane).
+/// Children per node: lanes of the node test, one AVX2 vector or [`HALVES`] SSE vectors per plane.
 pub const WIDTH: usize = 4 * HALVES;
 /// SSE vectors per plane of a node.
 pub const HALVES: usize = 2;
@@ -34,52 +34,243 @@ pub const LEAF_SIZE: u32 = 4;
 /// [`WideBvh::leaves`]); untagged entries are indices of inner nodes in [`WideBvh::nodes`].
 pub const LEAF: u32 = 1 << 31;
 
-/// One node: the child boxes as `[min x, max x, min y, max y, min z, max z]`, each [`WIDTH`]
-/// lanes in [`HALVES`] `Vec4`s, and what each child slot holds. An empty slot has the empty box
-/// (`min = +inf`, `max = -inf`), which no ray enters: `(±inf - o) / d` is an infinity of the
-/// sign that puts its entry after its exit on every axis (the inverse direction is finite and
-/// non-zero, obvhs's `safe_inverse`), so no mask of valid slots is needed.
+/// One plane of a node's [`WIDTH`] child boxes, lane `c` in `0[c / 4][c % 4]`: 32 bytes,
+/// 32-byte aligned, so the AVX2 test reads it with one aligned 256-bit load and the SSE test
+/// as its two halves.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub struct Plane(pub [Vec4; HALVES]);
+
+impl Plane {
+    fn lane(&self, c: usize) -> f32 {
+        self.0[c / 4][c % 4]
+    }
+}
+
+/// One node: the child boxes as `[min x, max x, min y, max y, min z, max z]`, each plane's
+/// [`WIDTH`] lanes contiguous ([`Plane`]), and what each child slot holds. An empty slot has
+/// the empty box (`min = +inf`, `max = -inf`), which no ray enters: `(±inf - o) / d` is an
+/// infinity of the sign that puts its entry after its exit on every axis (the inverse direction
+/// is finite and non-zero, obvhs's `safe_inverse`), so no mask of valid slots is needed.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct WideNode {
     /// Child slot `c`: an inner node's index in [`WideBvh::nodes`], or [`LEAF`] `|` the index of
     /// a leaf in [`WideBvh::leaves`] (0 for an empty slot, never hit; the root, index 0, is
     /// nobody's child). Slots are filled in order, so `children[4] == 0` means lanes 4-7 are
-    /// empty. First, so that a node of at most 4 children reads two cache lines.
+    /// empty (the SSE test then skips them).
     pub children: [u32; WIDTH],
-    /// `planes[h][p]`: plane `p` of lanes `4h..4h + 4`.
-    planes: [[Vec4; 6]; HALVES],
+    /// `planes[p]`: plane `p` of all lanes.
+    planes: [Plane; 6],
 }
 
-/// A ray prepared for [`WideNode::intersect`]: for each axis, which of the two planes is met
-/// first (`near`, chosen once per ray by the sign of `1 / d`, so the slab test needs no min/max
-/// of the two plane distances), the origin and the inverse direction splatted to 4 lanes.
+/// A node test: the slab test of all [`WIDTH`] children of a node (Kay and Kajiya 1986) for `t`
+/// in `[t_min, t_max]`. Both kernels ([`Sse`], [`Avx2`]) do the same f32 operations per lane in
+/// the same order (`(plane - o) * inv`, then `max`/`min` with the same operand order, then
+/// `<=`; no fused multiply-add), so their masks and entry distances are bit for bit the same.
+pub trait NodeTest: Copy {
+    /// The ray splatted to the kernel's lanes.
+    type Ray;
+    /// `inv_d` is the componentwise inverse of the direction, finite (obvhs's `safe_inverse`).
+    fn ray(self, o: Vec3A, inv_d: Vec3A, t_min: f32) -> Self::Ray;
+    /// Bit `c` of the mask set when child `c` is hit, and each child's entry distance, by which
+    /// the traversal orders and prunes them (lanes not in the mask are not meaningful).
+    fn intersect(self, node: &WideNode, ray: &Self::Ray, t_max: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// For each axis, which of the two planes is met first: chosen once per ray by the sign of
+/// `1 / d`, so the slab test needs no min/max of the two plane distances. The sign of `inv_d`,
+/// not of the direction: a component `-0.0` has an inverse of `-1 / f32::EPSILON`, and choosing
+/// by `d < 0` (false for `-0.0`) paired the planes wrongly, so such a ray missed every box it
+/// started in.
+#[inline(always)]
+fn near_planes(inv_d: Vec3A) -> [usize; 3] {
+    [usize::from(inv_d.x < 0.0), 2 + usize::from(inv_d.y < 0.0), 4 + usize::from(inv_d.z < 0.0)]
+}
+
+/// The portable node test: each plane as two 4-lane `Vec4`s (SSE2 on x86-64, NEON on AArch64,
+/// scalar elsewhere), the second half neither read nor tested when slot 4 is empty.
 #[derive(Clone, Copy, Debug)]
-pub struct WideRay {
+pub struct Sse;
+
+/// A ray prepared for [`Sse`]: the near planes, the origin and the inverse direction splatted to
+/// 4 lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct SseRay {
     near: [usize; 3],
     o: [Vec4; 3],
     inv: [Vec4; 3],
     t_min: Vec4,
 }
 
-impl WideRay {
-    /// `inv_d` is the componentwise inverse of the direction, finite (obvhs's `safe_inverse`).
-    /// The near plane follows the sign of `inv_d`, not of the direction: a component `-0.0` has
-    /// an inverse of `-1 / f32::EPSILON`, and choosing by `d < 0` (false for `-0.0`) paired
-    /// the planes wrongly, so such a ray missed every box it started in.
-    #[inline]
-    pub fn new(o: Vec3A, inv_d: Vec3A, t_min: f32) -> Self {
-        // Written out: `[0, 1, 2].map(..)` here compiled to an out-of-line `try_map` call per
-        // query (8% of hg-box's CPU samples, whose rays test few nodes).
-        WideRay {
-            near: [
-                usize::from(inv_d.x < 0.0),
-                2 + usize::from(inv_d.y < 0.0),
-                4 + usize::from(inv_d.z < 0.0),
-            ],
+impl NodeTest for Sse {
+    type Ray = SseRay;
+
+    #[inline(always)]
+    fn ray(self, o: Vec3A, inv_d: Vec3A, t_min: f32) -> SseRay {
+        SseRay {
+            near: near_planes(inv_d),
+            // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line `try_map` call per
+            // query (8% of hg-box's CPU samples, whose rays test few nodes).
             o: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
             inv: [Vec4::splat(inv_d.x), Vec4::splat(inv_d.y), Vec4::splat(inv_d.z)],
             t_min: Vec4::splat(t_min),
+        }
+    }
+
+    #[inline(always)]
+    fn intersect(self, node: &WideNode, ray: &SseRay, t_max: f32) -> (u32, [f32; WIDTH]) {
+        let t_max = Vec4::splat(t_max);
+        let mut mask = 0;
+        let mut entry = [Vec4::ZERO; HALVES];
+        for (h, entry) in entry.iter_mut().enumerate() {
+            if h > 0 && node.children[4 * h] == 0 {
+                // Lanes 4h.. are empty (slots fill in order): nothing to test or read.
+                *entry = Vec4::INFINITY;
+                continue;
+            }
+            let mut lo = ray.t_min;
+            let mut hi = t_max;
+            for a in 0..3 {
+                let n = ray.near[a];
+                let t_near = (node.planes[n].0[h] - ray.o[a]) * ray.inv[a];
+                let t_far = (node.planes[n ^ 1].0[h] - ray.o[a]) * ray.inv[a];
+                lo = lo.max(t_near);
+                hi = hi.min(t_far);
+            }
+            mask |= lo.cmple(hi).bitmask() << (4 * h);
+            *entry = lo;
+        }
+        (mask, std::array::from_fn(|c| entry[c / 4][c % 4]))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub use avx2::Avx2;
+
+/// Not x86-64: no AVX2 kernel. Uninhabited, so the traversal's AVX2 branch is dead code.
+#[cfg(not(target_arch = "x86_64"))]
+#[derive(Clone, Copy, Debug)]
+pub enum Avx2 {}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl Avx2 {
+    pub fn detect() -> Option<Self> {
+        None
+    }
+
+    pub fn run<R>(self, _: impl FnOnce() -> R) -> R {
+        match self {}
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl NodeTest for Avx2 {
+    type Ray = ();
+    fn ray(self, _: Vec3A, _: Vec3A, _: f32) {
+        match self {}
+    }
+    fn intersect(self, _: &WideNode, _: &(), _: f32) -> (u32, [f32; WIDTH]) {
+        match self {}
+    }
+}
+
+/// The 8-lane node test (docs/performance.md, "issue 17, fifth part"): one 256-bit vector per
+/// plane, chosen at run time, while the default build stays portable (no `target-cpu`).
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::{near_planes, NodeTest, WideNode, WIDTH};
+    use glam::Vec3A;
+    use std::arch::x86_64::*;
+
+    /// Proof that the CPU has AVX2: a value exists only after [`Avx2::detect`] found it, which
+    /// is what makes the `unsafe` calls of the `avx2`-enabled functions below sound.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Avx2(());
+
+    impl Avx2 {
+        /// `Some` when the CPU has AVX2, unless the environment variable `HAZE_FORCE_SSE` is set
+        /// (non-empty): an internal switch for tests and measurements (ARCHITECTURE.md), which
+        /// forces the portable kernel on every machine.
+        pub fn detect() -> Option<Self> {
+            let forced = std::env::var_os("HAZE_FORCE_SSE").is_some_and(|v| !v.is_empty());
+            (!forced && is_x86_feature_detected!("avx2")).then_some(Avx2(()))
+        }
+
+        /// Runs `f` inside a function compiled with AVX2 enabled, so that everything `f` inlines
+        /// (the whole traversal loop, its leaf tests and the [`Avx2`] node test) is compiled for
+        /// AVX2 (VEX encoding, 256-bit registers). One call per query, not per node.
+        #[inline(always)]
+        pub fn run<R>(self, f: impl FnOnce() -> R) -> R {
+            #[target_feature(enable = "avx2")]
+            unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            // SAFETY: `self` exists only if `detect` found AVX2 on this CPU.
+            unsafe { with_avx2(f) }
+        }
+    }
+
+    /// A ray prepared for [`Avx2`]: the near planes, the origin and the inverse direction
+    /// splatted to 8 lanes.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Avx2Ray {
+        near: [usize; 3],
+        o: [__m256; 3],
+        inv: [__m256; 3],
+        t_min: __m256,
+    }
+
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn ray(o: Vec3A, inv_d: Vec3A, t_min: f32) -> Avx2Ray {
+        Avx2Ray {
+            near: near_planes(inv_d),
+            o: [_mm256_set1_ps(o.x), _mm256_set1_ps(o.y), _mm256_set1_ps(o.z)],
+            inv: [_mm256_set1_ps(inv_d.x), _mm256_set1_ps(inv_d.y), _mm256_set1_ps(inv_d.z)],
+            t_min: _mm256_set1_ps(t_min),
+        }
+    }
+
+    /// [`super::Sse`]'s test on all 8 lanes at once: the same operations in the same order.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn intersect(node: &WideNode, ray: &Avx2Ray, t_max: f32) -> (u32, [f32; WIDTH]) {
+        // `Plane` is 32 bytes, 32-byte aligned: an aligned load of all 8 lanes.
+        let plane = |p: usize| node.planes[p].0.as_ptr().cast::<f32>();
+        let mut lo = ray.t_min;
+        let mut hi = _mm256_set1_ps(t_max);
+        for a in 0..3 {
+            let n = ray.near[a];
+            let t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(plane(n)), ray.o[a]), ray.inv[a]);
+            let t_far = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(plane(n ^ 1)), ray.o[a]), ray.inv[a]);
+            lo = _mm256_max_ps(lo, t_near);
+            hi = _mm256_min_ps(hi, t_far);
+        }
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(lo, hi)) as u32;
+        let mut entry = [0.0; WIDTH];
+        _mm256_storeu_ps(entry.as_mut_ptr(), lo);
+        (mask, entry)
+    }
+
+    impl NodeTest for Avx2 {
+        type Ray = Avx2Ray;
+
+        #[inline(always)]
+        fn ray(self, o: Vec3A, inv_d: Vec3A, t_min: f32) -> Avx2Ray {
+            // SAFETY: `self` exists only if the CPU has AVX2.
+            unsafe { ray(o, inv_d, t_min) }
+        }
+
+        #[inline(always)]
+        fn intersect(self, node: &WideNode, ray: &Avx2Ray, t_max: f32) -> (u32, [f32; WIDTH]) {
+            // SAFETY: as above.
+            unsafe { intersect(node, ray, t_max) }
         }
     }
 }
@@ -98,46 +289,17 @@ impl WideNode {
             None if plane % 2 == 0 => f32::INFINITY,
             None => f32::NEG_INFINITY,
         };
-        let planes = std::array::from_fn(|h| {
-            std::array::from_fn(|plane| {
+        let planes = std::array::from_fn(|plane| {
+            Plane(std::array::from_fn(|h| {
                 Vec4::new(
                     lane(4 * h, plane),
                     lane(4 * h + 1, plane),
                     lane(4 * h + 2, plane),
                     lane(4 * h + 3, plane),
                 )
-            })
+            }))
         });
         WideNode { planes, children: std::array::from_fn(|c| children.get(c).map_or(0, |x| x.1)) }
-    }
-
-    /// The slab test of all children (Kay and Kajiya 1986) for `t` in `[ray.t_min, t_max]`:
-    /// bit `c` of the mask set when child `c` is hit, and each child's entry distance (lanes
-    /// 4h to 4h + 3 in vector `h`), by which the traversal orders and prunes them.
-    #[inline(always)]
-    pub fn intersect(&self, ray: &WideRay, t_max: f32) -> (u32, [Vec4; HALVES]) {
-        let t_max = Vec4::splat(t_max);
-        let mut mask = 0;
-        let mut entry = [Vec4::ZERO; HALVES];
-        for (h, entry) in entry.iter_mut().enumerate() {
-            if h > 0 && self.children[4 * h] == 0 {
-                // Lanes 4h.. are empty (slots fill in order): nothing to test or read.
-                *entry = Vec4::INFINITY;
-                continue;
-            }
-            let mut lo = ray.t_min;
-            let mut hi = t_max;
-            for a in 0..3 {
-                let n = ray.near[a];
-                let t_near = (self.planes[h][n] - ray.o[a]) * ray.inv[a];
-                let t_far = (self.planes[h][n ^ 1] - ray.o[a]) * ray.inv[a];
-                lo = lo.max(t_near);
-                hi = hi.min(t_far);
-            }
-            mask |= lo.cmple(hi).bitmask() << (4 * h);
-            *entry = lo;
-        }
-        (mask, entry)
     }
 }
 
@@ -210,7 +372,7 @@ impl WideBvh {
         let mut need = vec![0usize; nodes.len()];
         for i in (0..nodes.len()).rev() {
             let n = &nodes[i];
-            let slots = (0..WIDTH).filter(|&c| n.planes[c / 4][0][c % 4] != f32::INFINITY);
+            let slots = (0..WIDTH).filter(|&c| n.planes[0].lane(c) != f32::INFINITY);
             let deepest = slots
                 .clone()
                 .filter(|&c| n.children[c] & LEAF == 0)
@@ -229,6 +391,71 @@ mod tests {
     use haze_core::Sampler;
     use obvhs::bvh2::builder::build_bvh2;
     use obvhs::BvhBuildParams;
+
+    /// The AVX2 node test gives the portable test's mask and entry distances bit for bit, on
+    /// random nodes of 1 to 8 boxes (some flat, where a ray's entry equals its exit, so `<`
+    /// instead of `<=` would fail) and rays with `±0` direction components. Skipped, with one
+    /// line, where the CPU has no AVX2.
+    #[test]
+    fn avx2_node_test_matches_the_portable_one_bit_for_bit() {
+        let Some(avx) = Avx2::detect() else {
+            eprintln!("skipped: no AVX2 on this CPU (or HAZE_FORCE_SSE is set)");
+            return;
+        };
+        let mut s = Sampler::from_seed(17);
+        let (mut hit_lanes, mut touching, mut missed) = (0, 0, 0);
+        for i in 0..20_000 {
+            let r = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
+            let count = 1 + i % WIDTH;
+            let boxes: Vec<(Aabb, u32)> = (0..count)
+                .map(|c| {
+                    let lo = r(&mut s) * 4.0;
+                    let mut hi = lo + r(&mut s) * 2.0;
+                    // Flat in one axis for every third box.
+                    if c % 3 == 0 {
+                        hi[c % 3] = lo[c % 3];
+                    }
+                    (Aabb::new(lo, hi), c as u32 + 1)
+                })
+                .collect();
+            let node = WideNode::new(&boxes);
+            let o = r(&mut s) * 6.0 - Vec3A::ONE;
+            // Aimed near the centre of one of the boxes, so that many lanes are hit.
+            let aim = boxes[i % count].0.center() + (r(&mut s) - Vec3A::splat(0.5)) * 0.5;
+            let mut d = (aim - o).normalize_or(Vec3A::X);
+            // A zero component (either sign) in a quarter of the rays.
+            if i % 4 == 0 {
+                d[(i / 4) % 3] = if i % 8 == 0 { 0.0 } else { -0.0 };
+            }
+            let inv = Vec3A::new(
+                obvhs::ray::safe_inverse(d.x),
+                obvhs::ray::safe_inverse(d.y),
+                obvhs::ray::safe_inverse(d.z),
+            );
+            let t_max = if i % 5 == 0 { f32::INFINITY } else { s.next_1d() * 8.0 };
+            let t_min = if i % 7 == 0 { s.next_1d() } else { 0.0 };
+            let (m_sse, e_sse) = Sse.intersect(&node, &Sse.ray(o, inv, t_min), t_max);
+            let (m_avx, e_avx) = avx.intersect(&node, &avx.ray(o, inv, t_min), t_max);
+            assert_eq!(m_sse, m_avx, "case {i}");
+            for c in 0..WIDTH {
+                if m_sse & (1 << c) != 0 {
+                    assert_eq!(e_sse[c].to_bits(), e_avx[c].to_bits(), "case {i}, lane {c}");
+                    hit_lanes += 1;
+                    // Entry equal to exit: recompute the exit of lane c.
+                    let exit = (0..3)
+                        .map(|a| {
+                            let far = if inv[a] < 0.0 { boxes[c].0.min[a] } else { boxes[c].0.max[a] };
+                            (far - o[a]) * inv[a]
+                        })
+                        .fold(t_max, f32::min);
+                    touching += usize::from(exit == e_sse[c]);
+                } else if c < count {
+                    missed += 1;
+                }
+            }
+        }
+        assert!(hit_lanes > 5_000 && missed > 5_000 && touching > 100, "{hit_lanes} {missed} {touching}");
+    }
 
     /// Every primitive sits in exactly one leaf, leaves hold 1 to `LEAF_SIZE` primitives, and each
     /// child box encloses everything below it.
@@ -263,7 +490,7 @@ mod tests {
                 }
                 let node = &wide.nodes[x as usize];
                 for c in 0..WIDTH {
-                    let lane = |pl: usize| node.planes[c / 4][pl][c % 4];
+                    let lane = |pl: usize| node.planes[pl].lane(c);
                     if lane(0) == f32::INFINITY {
                         continue;
                     }
