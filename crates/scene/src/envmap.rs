@@ -252,6 +252,14 @@ impl EnvMap {
     /// Samples a direction with probability proportional to luminance (see the module
     /// documentation); `None` if the map is black or the sample falls on a pole.
     pub fn sample(&self, u: glam::Vec2) -> Option<EnvMapSample> {
+        self.sample_if(u, |_| true)
+    }
+
+    /// [`Self::sample`], but `None` as soon as the direction is known and `accept` refuses it,
+    /// before its pdf and radiance are read (two cache misses on a large map): for a caller
+    /// whose estimate would be zero in that direction (a surface lit from behind).
+    #[inline]
+    pub fn sample_if(&self, u: glam::Vec2, accept: impl Fn(Vec3) -> bool) -> Option<EnvMapSample> {
         let total = self.total();
         if total <= 0.0 {
             return None;
@@ -271,6 +279,9 @@ impl EnvMap {
         }
         let local = Vec3::new(sin_p * sin_t, cos_t, -cos_p * sin_t);
         let d = self.to_world.transform_vector3(local).normalize();
+        if !accept(d) {
+            return None;
+        }
         let cells = (self.width * (self.height - 1)) as f64;
         let pdf_uv = self.cell_weight(i, j) / total * cells;
         let pdf = (pdf_uv / (2.0 * (PI as f64).powi(2) * sin_t as f64)) as f32;

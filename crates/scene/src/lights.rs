@@ -33,6 +33,21 @@ impl Scene {
     /// Samples a direction from `p` towards a uniformly chosen emitter. `None` if the sample
     /// carries no energy (back side of an area light, outside a spot's cone).
     pub fn sample_emitter_direction(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<EmitterSample> {
+        self.sample_emitter_direction_if(p, u_select, u, |_| true)
+    }
+
+    /// [`Self::sample_emitter_direction`] for a caller whose estimate is zero in the directions
+    /// `accept` refuses: an environment map then skips reading the pdf and radiance of such a
+    /// direction (`EnvMap::sample_if`); other emitters ignore `accept` (their lookups are cheap).
+    /// The same random numbers are used either way, and an accepted sample is the same.
+    #[inline]
+    pub fn sample_emitter_direction_if(
+        &self,
+        p: Vec3,
+        u_select: f32,
+        u: Vec2,
+        accept: impl Fn(Vec3) -> bool,
+    ) -> Option<EmitterSample> {
         let n = self.emitters.len();
         if n == 0 {
             return None;
@@ -99,7 +114,7 @@ impl Scene {
                 is_delta: false,
                 emitter: idx as u32,
             }),
-            Emitter::EnvMap(map) => map.sample(u).map(|s| EmitterSample {
+            Emitter::EnvMap(map) => map.sample_if(u, accept).map(|s| EmitterSample {
                 wi: s.d,
                 dist: f32::INFINITY,
                 radiance: s.radiance,

@@ -211,10 +211,15 @@ pub fn surface_nee(
     medium: Option<MediumId>,
     mis: SurfaceMis,
 ) -> Rgb {
-    let Some(es) = scene.sample_emitter_direction(h.p, sampler.next_1d(), sampler.next_2d()) else {
+    let shape = &scene.shapes[h.shape as usize];
+    // Directions in which `f` is zero are refused before an environment map reads their pdf
+    // and radiance: the same `wo` as below, so exactly the samples whose `f` is black.
+    let front_only = shape.bsdf.front_only();
+    let accept = |d: Vec3| !front_only || (wi.z > 0.0 && frame.to_local(d).z > 0.0);
+    let Some(es) = scene.sample_emitter_direction_if(h.p, sampler.next_1d(), sampler.next_2d(), accept)
+    else {
         return Rgb::ZERO;
     };
-    let shape = &scene.shapes[h.shape as usize];
     let wo = frame.to_local(es.wi);
     let f = shape.bsdf.eval(wi, wo, h.uv);
     if f.is_black() {

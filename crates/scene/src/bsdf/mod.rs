@@ -142,6 +142,12 @@ impl Bsdf {
         }
     }
 
+    /// True if [`Self::eval`] is zero unless `wi` and `wo` both lie on the front side
+    /// (`z > 0`): `diffuse`, `plastic` and `roughplastic` (each checks exactly that first).
+    pub fn front_only(&self) -> bool {
+        matches!(self, Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_))
+    }
+
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
     /// for specular BSDFs).
     pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
