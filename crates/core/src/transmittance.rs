@@ -39,10 +39,22 @@ pub fn hero_channel(u: f32) -> usize {
     ((u * 3.0) as usize).min(2)
 }
 
+/// The distance [`sample_free_flight`] samples from `u`, `-ln(1 - u) / sigma_t[hero]` (infinite
+/// for a zero hero extinction), before it is compared with the surface: a caller that knows it
+/// first can cut its ray there (a free flight that ends sooner needs no surface).
+#[inline]
+pub fn free_flight_distance(sigma_t: Rgb, hero: usize, u: f32) -> f32 {
+    let s = sigma_t[hero];
+    if s > 0.0 {
+        -(1.0 - u).ln() / s
+    } else {
+        f32::INFINITY
+    }
+}
+
 /// Samples a free-flight distance from the exponential of channel `hero`.
 pub fn sample_free_flight(sigma_t: Rgb, t_max: f32, hero: usize, u: f32) -> FreeFlight {
-    let s = sigma_t[hero];
-    let t = if s > 0.0 { -(1.0 - u).ln() / s } else { f32::INFINITY };
+    let t = free_flight_distance(sigma_t, hero, u);
     if t < t_max {
         let tr = sigma_t.exp_neg(t);
         let pdf = sigma_t * tr;

@@ -23,7 +23,7 @@ use super::Integrator;
 use crate::components::{Component, PathRadiance};
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
-use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
+use haze_core::transmittance::{free_flight_distance, hero_channel, sample_free_flight, FreeFlight};
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::hetero::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
@@ -91,17 +91,33 @@ impl Integrator for VolPath {
                 break;
             }
 
+            // In a homogeneous medium the free-flight distance comes first (the same random
+            // number as always): the surface matters only if it lies before that distance, so
+            // the ray is cut there and the traversal prunes every box beyond it. The hit found is
+            // the closest one whenever the path reaches it; otherwise the flight ends at its
+            // sampled distance, whose weight does not depend on the surface.
+            let homogeneous_flight = match medium {
+                Some(mid) if scene.medium(mid).hetero.is_none() => {
+                    let u = sampler.next_1d();
+                    Some((u, free_flight_distance(scene.medium(mid).sigma_t, hero, u)))
+                }
+                _ => None,
+            };
+            let query = match homogeneous_flight {
+                Some((_, t)) if t < ray.t_max => Ray { t_max: t, ..ray },
+                _ => ray,
+            };
             // The surface interaction only once the path reaches the surface (below).
-            let hit = scene.intersect_preliminary(&ray);
+            let hit = scene.intersect_preliminary(&query);
             let t_surface = hit.map_or(ray.t_max, |h| h.t());
 
             if let Some(mid) = medium {
                 let med = scene.medium(mid);
                 // Homogeneous: `sigma_s` multiplies after the depth check, as it always did (the
                 // same rounding); heterogeneous: the flight's weight already holds `sigma_s(x)`.
-                let (flight, sigma_s) = match &med.hetero {
-                    None => (
-                        match sample_free_flight(med.sigma_t, t_surface, hero, sampler.next_1d()) {
+                let (flight, sigma_s) = match (&med.hetero, homogeneous_flight) {
+                    (None, Some((u, _))) => (
+                        match sample_free_flight(med.sigma_t, t_surface, hero, u) {
                             FreeFlight::Interaction { t, weight, ratio } => {
                                 Flight::Scatter { t, weight, ratio }
                             }
@@ -110,7 +126,8 @@ impl Integrator for VolPath {
                         med.sigma_s(),
                     ),
                     // Delta tracking against the majorant grid (`docs/theory.md` §12.3).
-                    Some(h) => (h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler), Rgb::ONE),
+                    (Some(h), _) => (h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler), Rgb::ONE),
+                    (None, None) => unreachable!("a homogeneous medium's flight is drawn above"),
                 };
                 match flight {
                     Flight::Scatter { t, weight, ratio } => {
