@@ -201,6 +201,24 @@ struct Leaf {
     blocks: u32,
 }
 
+/// `$body` with `$k` bound to the query's node-test kernel. The kernel is chosen once per query,
+/// not per node: with AVX2 the whole query, its traversal loop and leaf tests included, runs
+/// inside one AVX2-enabled function (`Avx2::run`); otherwise with the portable `wide::Sse`.
+macro_rules! with_kernel {
+    ($accel:ident, $k:ident => $body:expr) => {
+        match $accel.avx2 {
+            Some($k) => $k.run(
+                #[inline(always)]
+                || $body,
+            ),
+            None => {
+                let $k = wide::Sse;
+                $body
+            }
+        }
+    };
+}
+
 pub struct Accel {
     /// The wide tree collapsed from obvhs's binary tree ([`wide`]): what traversal reads.
     bvh: Option<WideBvh>,
@@ -459,15 +477,7 @@ impl Accel {
     /// then the interaction is never built (Mitsuba 3 splits its queries the same way,
     /// `PreliminaryIntersection` and `compute_surface_interaction`).
     pub fn intersect_preliminary(&self, ray: &Ray) -> Option<PreliminaryHit> {
-        // The node test is chosen once per query, not per node: with AVX2 the whole query, its
-        // traversal loop and leaf tests included, runs inside one AVX2-enabled function.
-        match self.avx2 {
-            Some(k) => k.run(
-                #[inline(always)]
-                || self.intersect_with(k, ray),
-            ),
-            None => self.intersect_with(wide::Sse, ray),
-        }
+        with_kernel!(self, k => self.intersect_with(k, ray))
     }
 
     #[inline(always)]
@@ -612,13 +622,7 @@ impl Accel {
     }
 
     pub fn occluded(&self, ray: &Ray) -> bool {
-        match self.avx2 {
-            Some(k) => k.run(
-                #[inline(always)]
-                || self.occluded_with(k, ray),
-            ),
-            None => self.occluded_with(wide::Sse, ray),
-        }
+        with_kernel!(self, k => self.occluded_with(k, ray))
     }
 
     #[inline(always)]
@@ -665,13 +669,7 @@ impl Accel {
         ray: &Ray,
         hits: &mut [ShadowHit; MAX_SHADOW_HITS],
     ) -> ShadowQuery {
-        match self.avx2 {
-            Some(k) => k.run(
-                #[inline(always)]
-                || self.shadow_hits_with(k, shapes, ray, hits),
-            ),
-            None => self.shadow_hits_with(wide::Sse, shapes, ray, hits),
-        }
+        with_kernel!(self, k => self.shadow_hits_with(k, shapes, ray, hits))
     }
 
     #[inline(always)]
