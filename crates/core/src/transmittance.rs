@@ -54,7 +54,13 @@ pub fn free_flight_distance(sigma_t: Rgb, hero: usize, u: f32) -> f32 {
 
 /// Samples a free-flight distance from the exponential of channel `hero`.
 pub fn sample_free_flight(sigma_t: Rgb, t_max: f32, hero: usize, u: f32) -> FreeFlight {
-    let t = free_flight_distance(sigma_t, hero, u);
+    free_flight_at(sigma_t, t_max, hero, free_flight_distance(sigma_t, hero, u))
+}
+
+/// [`sample_free_flight`] given the distance `t` it sampled ([`free_flight_distance`]): an
+/// interaction at `t` if it comes before `t_max`, else passing to `t_max`, with the weights of
+/// channel `hero`'s exponential.
+pub fn free_flight_at(sigma_t: Rgb, t_max: f32, hero: usize, t: f32) -> FreeFlight {
     if t < t_max {
         let tr = sigma_t.exp_neg(t);
         let pdf = sigma_t * tr;

@@ -23,7 +23,7 @@ use super::Integrator;
 use crate::components::{Component, PathRadiance};
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
-use haze_core::transmittance::{free_flight_distance, hero_channel, sample_free_flight, FreeFlight};
+use haze_core::transmittance::{free_flight_at, free_flight_distance, hero_channel, FreeFlight};
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::hetero::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
@@ -98,13 +98,12 @@ impl Integrator for VolPath {
             // sampled distance, whose weight does not depend on the surface.
             let homogeneous_flight = match medium {
                 Some(mid) if scene.medium(mid).hetero.is_none() => {
-                    let u = sampler.next_1d();
-                    Some((u, free_flight_distance(scene.medium(mid).sigma_t, hero, u)))
+                    Some(free_flight_distance(scene.medium(mid).sigma_t, hero, sampler.next_1d()))
                 }
                 _ => None,
             };
             let query = match homogeneous_flight {
-                Some((_, t)) if t < ray.t_max => Ray { t_max: t, ..ray },
+                Some(t) if t < ray.t_max => Ray { t_max: t, ..ray },
                 _ => ray,
             };
             // The surface interaction only once the path reaches the surface (below).
@@ -116,8 +115,8 @@ impl Integrator for VolPath {
                 // Homogeneous: `sigma_s` multiplies after the depth check, as it always did (the
                 // same rounding); heterogeneous: the flight's weight already holds `sigma_s(x)`.
                 let (flight, sigma_s) = match (&med.hetero, homogeneous_flight) {
-                    (None, Some((u, _))) => (
-                        match sample_free_flight(med.sigma_t, t_surface, hero, u) {
+                    (None, Some(t)) => (
+                        match free_flight_at(med.sigma_t, t_surface, hero, t) {
                             FreeFlight::Interaction { t, weight, ratio } => {
                                 Flight::Scatter { t, weight, ratio }
                             }
