@@ -176,7 +176,7 @@ impl LightPoint {
             Emitter::Point { position, intensity } => {
                 Some(LightPoint { p: *position, kind: LightKind::Point { intensity: *intensity } })
             }
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => Some(LightPoint {
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } => Some(LightPoint {
                 p: to_world.transform_point3(Vec3::ZERO),
                 kind: LightKind::Spot {
                     to_local: to_world.inverse(),
@@ -298,7 +298,7 @@ mod tests {
             </emitter>
         </scene>"#;
         let scene = load_str(xml, Path::new("spot.xml"), Path::new("."), &LoadOptions::default()).unwrap();
-        let Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } = scene.emitters[0].clone()
+        let Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } = scene.emitters[0].clone()
         else {
             panic!("a spot light")
         };

@@ -207,7 +207,7 @@ impl CausticTracer {
         let (d, pdf_dir) = self.sample_direction(p, u_pick, u_dir)?;
         let le = match &scene.emitters[k as usize] {
             Emitter::Point { intensity, .. } => *intensity,
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => {
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } => {
                 let local = to_world.inverse().transform_vector3(d).normalize();
                 *intensity * Emitter::spot_falloff(*cutoff_angle, *beam_width, local)
             }

@@ -11,8 +11,19 @@ pub enum Emitter {
     Point { position: Vec3, intensity: Rgb },
     /// Spot light at the origin of `to_world` shining down its local `+z`. Mitsuba 3's falloff:
     /// full intensity inside `beam_width`, linear in angle down to zero at `cutoff_angle`
-    /// (angles in radians, half-angles from the axis).
-    Spot { to_world: Mat4, intensity: Rgb, cutoff_angle: f32, beam_width: f32 },
+    /// (angles in radians, half-angles from the axis). Made by [`Emitter::spot`], which
+    /// derives the last three fields once (next-event estimation reads them per sample).
+    Spot {
+        to_world: Mat4,
+        intensity: Rgb,
+        cutoff_angle: f32,
+        beam_width: f32,
+        /// The inverse of `to_world`.
+        to_local: Mat4,
+        /// `cutoff_angle.cos()` and `beam_width.cos()`.
+        cos_cutoff: f32,
+        cos_beam: f32,
+    },
     /// Diffuse area light on shape `shape`, emitting `radiance` on the side its normal points to.
     Area { shape: u32, radiance: Rgb },
     /// Uniform environment radiance from every direction at infinity.
@@ -22,13 +33,39 @@ pub enum Emitter {
 }
 
 impl Emitter {
+    /// The spot light of [`Emitter::Spot`] (angles in radians).
+    pub fn spot(to_world: Mat4, intensity: Rgb, cutoff_angle: f32, beam_width: f32) -> Self {
+        Emitter::Spot {
+            to_world,
+            intensity,
+            cutoff_angle,
+            beam_width,
+            to_local: to_world.inverse(),
+            cos_cutoff: cutoff_angle.cos(),
+            cos_beam: beam_width.cos(),
+        }
+    }
+
     /// Spot falloff for a direction `d_local` (unit, in the spot's local frame), in `[0, 1]`.
     pub fn spot_falloff(cutoff_angle: f32, beam_width: f32, d_local: Vec3) -> f32 {
+        Self::spot_falloff_cos(cutoff_angle, beam_width, cutoff_angle.cos(), beam_width.cos(), d_local)
+    }
+
+    /// [`Self::spot_falloff`] with the cosines of the two angles given (`cos_cutoff`,
+    /// `cos_beam` of [`Emitter::Spot`]): the same value without two `cos` calls.
+    #[inline]
+    pub fn spot_falloff_cos(
+        cutoff_angle: f32,
+        beam_width: f32,
+        cos_cutoff: f32,
+        cos_beam: f32,
+        d_local: Vec3,
+    ) -> f32 {
         let cos_t = d_local.z;
-        if cos_t <= cutoff_angle.cos() {
+        if cos_t <= cos_cutoff {
             return 0.0;
         }
-        if cos_t >= beam_width.cos() {
+        if cos_t >= cos_beam {
             return 1.0;
         }
         ((cutoff_angle - cos_t.clamp(-1.0, 1.0).acos()) / (cutoff_angle - beam_width)).clamp(0.0, 1.0)

@@ -8,6 +8,8 @@ use crate::shape::{AreaSampler, Shape};
 #[derive(Clone, Debug, Default)]
 pub struct EmitterTables {
     pub area: Vec<Option<AreaSampler>>,
+    /// Some emitter is an environment map ([`Scene::prefetch_emitter_sample`](crate::Scene::prefetch_emitter_sample) has work).
+    pub has_envmap: bool,
 }
 
 impl EmitterTables {
@@ -19,6 +21,7 @@ impl EmitterTables {
                 _ => None,
             })
             .collect();
-        EmitterTables { area }
+        let has_envmap = emitters.iter().any(|e| matches!(e, Emitter::EnvMap(_)));
+        EmitterTables { area, has_envmap }
     }
 }

@@ -30,17 +30,26 @@ pub struct EnvMap {
     pixels: Vec<Rgb>,
     to_world: Mat4,
     to_local: Mat4,
-    /// Cumulative weights of the `height - 1` cell rows (`marginal[j + 1] - marginal[j]` is the
-    /// weight of row `j`); the last entry is the total weight.
-    marginal: Vec<f64>,
-    /// Per cell row, the cumulative weights of its `width` cells (`width + 1` entries each).
-    conditional: Vec<f64>,
-    /// What [`Self::sample`] draws from: the rows by weight, and per row its cells by weight,
-    /// as alias tables (one table entry read per choice instead of a binary search through
-    /// the cumulative weights, a cache miss per step on large maps). The same probabilities,
-    /// so the same pdf; only the map from random numbers to cells differs.
+    /// Total weight of the cells.
+    total: f64,
+    /// What [`Self::sample`] draws the row from: the `height - 1` cell rows by weight, as an
+    /// alias table (one table entry read per choice instead of a binary search through the
+    /// cumulative weights, a cache miss per step on large maps).
     rows: Alias,
-    cells: Vec<Alias>,
+    /// The `width x (height - 1)` cells, row-major: per row, the alias table of its cells by
+    /// weight, and beside each slot its cell's `pdf_uv`, so that a sample that keeps its slot
+    /// reads one cache line for both (and the pdf of an escaping ray's cell is one read).
+    cells: Vec<Cell>,
+}
+
+/// One cell of [`EnvMap::cells`]: its slot in its row's alias table and its own pdf.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+struct Cell {
+    slot: AliasSlot,
+    /// The cell's probability times the number of cells: the density over `(u, v)` in the
+    /// unit square, constant over the cell.
+    pdf_uv: f64,
 }
 
 /// Walker's alias table (Vose's construction, "A linear algorithm for generating random
@@ -91,15 +100,42 @@ impl Alias {
     /// left of `u`.
     #[inline]
     fn sample(&self, u: f64) -> (usize, f64) {
-        let n = self.slots.len();
-        let s = u * n as f64;
-        let k = (s as usize).min(n - 1);
-        let f = s - k as f64;
-        let slot = self.slots[k];
-        let q = slot.q as f64;
-        let (k, f) = if f < q { (k, f / q) } else { (slot.alias as usize, (f - q) / (1.0 - q)) };
-        (k, f.clamp(0.0, 1.0 - 1e-7))
+        pick(self.slots.len(), u, |k| self.slots[k])
     }
+}
+
+/// The alias-table draw over `n` slots read through `slot`: slot `k = floor(u n)` keeps itself
+/// if the rest of `u` falls below its `q`, else gives its alias; the rest of `u`, rescaled to
+/// `[0, 1)`, is returned as a fresh uniform number.
+#[inline]
+fn pick(n: usize, u: f64, slot: impl Fn(usize) -> AliasSlot) -> (usize, f64) {
+    let s = u * n as f64;
+    let k = (s as usize).min(n - 1);
+    let f = s - k as f64;
+    let slot = slot(k);
+    let q = slot.q as f64;
+    let (k, f) = if f < q { (k, f / q) } else { (slot.alias as usize, (f - q) / (1.0 - q)) };
+    (k, f.clamp(0.0, 1.0 - 1e-7))
+}
+
+/// The slot [`pick`] reads first for `u`.
+#[inline]
+fn first_slot(n: usize, u: f64) -> usize {
+    ((u * n as f64) as usize).min(n - 1)
+}
+
+/// Asks the CPU to bring `x`'s cache line closer (a hint: no effect on results, never faults).
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing architecturally and cannot fault; `x` is a valid
+    // reference anyway.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
 }
 
 /// A direction sampled from an [`EnvMap`].
@@ -128,9 +164,11 @@ impl EnvMap {
         }
         let rows = height - 1;
         let lum = |x: usize, y: usize| pixels[y * width + x % width].luminance().max(0.0) as f64;
+        // Per row, the cumulative weights of its cells (`width + 1` entries each), and of the
+        // rows: a cell's weight is the difference of two neighbours, as the pdf always took it.
         let mut conditional = Vec::with_capacity(rows * (width + 1));
         let mut marginal = Vec::with_capacity(rows + 1);
-        let mut cells = Vec::with_capacity(rows);
+        let mut slots = Vec::with_capacity(rows * width);
         marginal.push(0.0);
         for j in 0..rows {
             let sin_theta = (PI as f64 * (j as f64 + 0.5) / rows as f64).sin();
@@ -143,20 +181,29 @@ impl EnvMap {
                 acc += w;
                 conditional.push(acc);
             }
-            cells.push(Alias::new(&weights));
+            slots.extend(Alias::new(&weights).slots);
             marginal.push(marginal[j] + acc);
         }
         let row_weights: Vec<f64> = marginal.windows(2).map(|m| m[1] - m[0]).collect();
-        let rows = Alias::new(&row_weights);
+        let total = marginal[rows];
+        let count = (width * rows) as f64;
+        let cells = slots
+            .iter()
+            .enumerate()
+            .map(|(c, &slot)| {
+                let (j, i) = (c / width, c % width);
+                let row = &conditional[j * (width + 1)..(j + 1) * (width + 1)];
+                Cell { slot, pdf_uv: (row[i + 1] - row[i]) / total * count }
+            })
+            .collect();
         Ok(EnvMap {
             width,
             height,
             pixels,
             to_world,
             to_local: to_world.inverse(),
-            marginal,
-            conditional,
-            rows,
+            total,
+            rows: Alias::new(&row_weights),
             cells,
         })
     }
@@ -186,12 +233,26 @@ impl EnvMap {
         (u - u.floor(), v, (l.x * l.x + l.z * l.z).sqrt())
     }
 
+    /// `x.rem_euclid(width)` for `x` in `[-width, 2 width)`, the only values it gets (`x` is
+    /// half a pixel below a `u` in `[0, 1)` times the width, or a sampled cell point, which can
+    /// round up to `width`), without `rem_euclid`'s `fmodf` call: the same value, since
+    /// `fmodf` is exact and then either adds `width` (negative `x`) or subtracts it.
+    #[inline]
+    fn wrap(&self, x: f32) -> f32 {
+        let w = self.width as f32;
+        if x < 0.0 {
+            x + w
+        } else if x >= w {
+            x - w
+        } else {
+            x
+        }
+    }
+
     /// Texture coordinates `(x, y)` in cell units: `x` in `[0, width)` with pixel `i` at `x = i`,
     /// `y` in `[0, height - 1]` with row `j` at `y = j`.
     fn texel(&self, u: f32, v: f32) -> (f32, f32) {
-        let x = u * self.width as f32 - 0.5;
-        let x = x.rem_euclid(self.width as f32);
-        (x, v * (self.height - 1) as f32)
+        (self.wrap(u * self.width as f32 - 0.5), v * (self.height - 1) as f32)
     }
 
     fn cell(&self, x: f32, y: f32) -> (usize, usize) {
@@ -209,19 +270,12 @@ impl EnvMap {
     fn bilinear(&self, x: f32, y: f32) -> Rgb {
         let (i, j) = self.cell(x, y);
         let (fx, fy) = (x - i as f32, y - j as f32);
-        let px = |i: usize, j: usize| self.pixels[j * self.width + i % self.width];
-        let top = px(i, j) * (1.0 - fx) + px(i + 1, j) * fx;
-        let bottom = px(i, j + 1) * (1.0 - fx) + px(i + 1, j + 1) * fx;
+        // `i < width` (`cell`); the right neighbour wraps around (no `%`: an integer division).
+        let i1 = if i + 1 == self.width { 0 } else { i + 1 };
+        let px = |i: usize, j: usize| self.pixels[j * self.width + i];
+        let top = px(i, j) * (1.0 - fx) + px(i1, j) * fx;
+        let bottom = px(i, j + 1) * (1.0 - fx) + px(i1, j + 1) * fx;
         top * (1.0 - fy) + bottom * fy
-    }
-
-    fn total(&self) -> f64 {
-        self.marginal[self.height - 1]
-    }
-
-    fn cell_weight(&self, i: usize, j: usize) -> f64 {
-        let row = &self.conditional[j * (self.width + 1)..(j + 1) * (self.width + 1)];
-        row[i + 1] - row[i]
     }
 
     /// Solid-angle pdf with which [`Self::sample`] returns the unit world direction `d`.
@@ -239,13 +293,11 @@ impl EnvMap {
 
     /// The solid-angle pdf at texel coordinates `(x, y)` of a direction with `sin(theta)`.
     fn texel_pdf(&self, x: f32, y: f32, sin_theta: f32) -> f32 {
-        let total = self.total();
-        if total <= 0.0 || sin_theta <= 0.0 {
+        if self.total <= 0.0 || sin_theta <= 0.0 {
             return 0.0;
         }
         let (i, j) = self.cell(x, y);
-        let cells = (self.width * (self.height - 1)) as f64;
-        let pdf_uv = self.cell_weight(i, j) / total * cells;
+        let pdf_uv = self.cells[j * self.width + i].pdf_uv;
         (pdf_uv / (2.0 * (PI as f64).powi(2) * sin_theta as f64)) as f32
     }
 
@@ -260,12 +312,12 @@ impl EnvMap {
     /// whose estimate would be zero in that direction (a surface lit from behind).
     #[inline]
     pub fn sample_if(&self, u: glam::Vec2, accept: impl Fn(Vec3) -> bool) -> Option<EnvMapSample> {
-        let total = self.total();
-        if total <= 0.0 {
+        if self.total <= 0.0 {
             return None;
         }
         let (j, fy) = self.rows.sample(u.y as f64);
-        let (i, fx) = self.cells[j].sample(u.x as f64);
+        let row = &self.cells[j * self.width..(j + 1) * self.width];
+        let (i, fx) = pick(self.width, u.x as f64, |k| row[k].slot);
         let x = i as f32 + fx as f32;
         let y = j as f32 + fy as f32;
         // Back from texel to (u, v): pixel i sits at u = (i + 1/2) / W.
@@ -282,16 +334,33 @@ impl EnvMap {
         if !accept(d) {
             return None;
         }
-        let cells = (self.width * (self.height - 1)) as f64;
-        let pdf_uv = self.cell_weight(i, j) / total * cells;
-        let pdf = (pdf_uv / (2.0 * (PI as f64).powi(2) * sin_t as f64)) as f32;
+        let pdf = (row[i].pdf_uv / (2.0 * (PI as f64).powi(2) * sin_t as f64)) as f32;
         // The radiance at the sampled texel point itself: `eval(d)` would map `d` back to it
         // through `atan2` and `acos` (the same point up to rounding).
-        (pdf > 0.0).then(|| EnvMapSample {
-            d,
-            radiance: self.bilinear(x.rem_euclid(self.width as f32), y),
-            pdf,
-        })
+        (pdf > 0.0).then(|| EnvMapSample { d, radiance: self.bilinear(self.wrap(x), y), pdf })
+    }
+
+    /// Prefetches what [`Self::sample_if`] with the same `u` reads after the row's table (which
+    /// stays cached: `height - 1` slots): the cell slot `u.x` falls on with its pdf, and the
+    /// four pixels around that cell. When the slot keeps itself (its `q`), the sample then finds
+    /// everything in cache; when it goes to its alias, that cell's lines are still fetched
+    /// then. A caller that knows the random numbers of a coming sample calls this before other
+    /// work (a ray traversal), so that the cache misses overlap it instead of stalling the
+    /// sample (volpath's next-event estimation: docs/performance.md, "issue 17, seventh part").
+    #[inline]
+    pub fn prefetch(&self, u: glam::Vec2) {
+        if self.total <= 0.0 {
+            return;
+        }
+        let (j, _) = self.rows.sample(u.y as f64);
+        let k = first_slot(self.width, u.x as f64);
+        prefetch(&self.cells[j * self.width + k]);
+        // Not `% width`: an integer division, dearer than the prefetch itself.
+        let k1 = if k + 1 == self.width { 0 } else { k + 1 };
+        for r in [j, j + 1] {
+            prefetch(&self.pixels[r * self.width + k]);
+            prefetch(&self.pixels[r * self.width + k1]);
+        }
     }
 }
 

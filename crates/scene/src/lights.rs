@@ -36,6 +36,34 @@ impl Scene {
         self.sample_emitter_direction_if(p, u_select, u, |_| true)
     }
 
+    /// The emitter `u_select` chooses (uniformly) and the probability of that choice.
+    #[inline]
+    fn select_emitter(&self, u_select: f32) -> Option<(usize, f32)> {
+        let n = self.emitters.len();
+        (n > 0).then(|| (((u_select * n as f32) as usize).min(n - 1), 1.0 / n as f32))
+    }
+
+    /// A hint, no effect on results: prefetches the cache lines that
+    /// [`Self::sample_emitter_direction`] will read first when it is called with the random
+    /// numbers `sampler` gives next (`next_1d`, then `next_2d`), for an environment map (its
+    /// large tables are the misses; other emitters read little). `sampler` is not advanced: a
+    /// copy draws the numbers. Worth it only where those are the next-event estimation's numbers
+    /// and a ray traversal follows before it (volpath, docs/performance.md "issue 17, seventh
+    /// part").
+    #[inline]
+    pub fn prefetch_emitter_sample(&self, sampler: &haze_core::Sampler) {
+        if !self.emitter_tables.has_envmap {
+            return;
+        }
+        let mut peek = sampler.clone();
+        let u_select = peek.next_1d();
+        if let Some((idx, _)) = self.select_emitter(u_select) {
+            if let Emitter::EnvMap(map) = &self.emitters[idx] {
+                map.prefetch(peek.next_2d());
+            }
+        }
+    }
+
     /// [`Self::sample_emitter_direction`] for a caller whose estimate is zero in the directions
     /// `accept` refuses: an environment map then skips reading the pdf and radiance of such a
     /// direction (`EnvMap::sample_if`); other emitters ignore `accept` (their lookups are cheap).
@@ -48,12 +76,7 @@ impl Scene {
         u: Vec2,
         accept: impl Fn(Vec3) -> bool,
     ) -> Option<EmitterSample> {
-        let n = self.emitters.len();
-        if n == 0 {
-            return None;
-        }
-        let idx = ((u_select * n as f32) as usize).min(n - 1);
-        let sel = 1.0 / n as f32;
+        let (idx, sel) = self.select_emitter(u_select)?;
         match &self.emitters[idx] {
             Emitter::Point { position, intensity } => {
                 let v = *position - p;
@@ -68,14 +91,22 @@ impl Scene {
                     emitter: idx as u32,
                 })
             }
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => {
+            Emitter::Spot {
+                to_world,
+                intensity,
+                cutoff_angle,
+                beam_width,
+                to_local,
+                cos_cutoff,
+                cos_beam,
+            } => {
                 let pos = to_world.transform_point3(Vec3::ZERO);
                 let v = pos - p;
                 let d2 = v.length_squared();
                 let dist = d2.sqrt();
                 let wi = v / dist;
-                let local = to_world.inverse().transform_vector3(-wi).normalize();
-                let f = Emitter::spot_falloff(*cutoff_angle, *beam_width, local);
+                let local = to_local.transform_vector3(-wi).normalize();
+                let f = Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, *cos_cutoff, *cos_beam, local);
                 (f > 0.0).then(|| EmitterSample {
                     wi,
                     dist,
@@ -226,16 +257,16 @@ impl Scene {
         Ok(())
     }
 
-    /// Samples the start of a light path: an emitter chosen uniformly, a point on it and a
-    /// direction. Point lights emit uniformly over the sphere (`weight = 4 pi I N`), spot lights
-    /// uniformly in their cutoff cone (`weight = I falloff 2 pi (1 - cos_cutoff) N`), area lights
-    /// from a uniform point with a cosine-weighted direction on the normal side
-    /// (`weight = L pi A N`), `N` the number of emitters.
     /// The uniform-area sampler of area emitter `emitter` (`None` for other kinds).
     pub fn area_sampler(&self, emitter: u32) -> Option<&crate::shape::AreaSampler> {
         self.emitter_tables.area.get(emitter as usize)?.as_ref()
     }
 
+    /// Samples the start of a light path: an emitter chosen uniformly, a point on it and a
+    /// direction. Point lights emit uniformly over the sphere (`weight = 4 pi I N`), spot lights
+    /// uniformly in their cutoff cone (`weight = I falloff 2 pi (1 - cos_cutoff) N`), area lights
+    /// from a uniform point with a cosine-weighted direction on the normal side
+    /// (`weight = L pi A N`), `N` the number of emitters.
     pub fn sample_emission(&self, u_select: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         use haze_core::sampling::{sample_cosine_hemisphere, sample_uniform_cone, uniform_cone_pdf};
         use haze_core::Frame;
@@ -253,7 +284,7 @@ impl Scene {
                 weight: *intensity * (4.0 * haze_core::PI * sel),
                 emitter: idx as u32,
             }),
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width } => {
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } => {
                 let cos_max = cutoff_angle.cos();
                 let local = sample_uniform_cone(u_dir, cos_max);
                 let f = Emitter::spot_falloff(*cutoff_angle, *beam_width, local);

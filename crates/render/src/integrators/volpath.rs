@@ -106,6 +106,11 @@ impl Integrator for VolPath {
                 Some(t) if t < ray.t_max => Ray { t_max: t, ..ray },
                 _ => ray,
             };
+            // Whether the path scatters in a homogeneous medium or reaches a surface, the
+            // sampler's next numbers are those of its next-event estimation (in a heterogeneous
+            // medium delta tracking draws first, and the hint is wasted): an environment map's
+            // cache misses for that sample then overlap the traversal below.
+            scene.prefetch_emitter_sample(sampler);
             // The surface interaction only once the path reaches the surface (below).
             let hit = scene.intersect_preliminary(&query);
             let t_surface = hit.map_or(ray.t_max, |h| h.t());

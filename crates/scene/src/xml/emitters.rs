@@ -63,12 +63,7 @@ pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
                     format!("'beam_width' ({beam}) must lie in [0, cutoff_angle = {cutoff}] degrees"),
                 ));
             }
-            Emitter::Spot {
-                to_world,
-                intensity,
-                cutoff_angle: cutoff.to_radians(),
-                beam_width: beam.to_radians(),
-            }
+            Emitter::spot(to_world, intensity, cutoff.to_radians(), beam.to_radians())
         }
         "constant" => Emitter::Constant { radiance: non_negative(p, "radiance")? },
         "envmap" => {
