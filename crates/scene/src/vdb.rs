@@ -53,6 +53,12 @@ const MIN_FILE_VERSION: u32 = 222;
 pub const MAX_VDB_FILE_BYTES: u64 = 2 << 30;
 pub const MAX_DENSE_CELLS: u64 = (2 << 30) / 4;
 
+/// Most memory the tree `vdb-rs` builds from a grid may take, its nodes expanded (masks and every
+/// value: ~16x what the file stores for nodes of inactive background, vendor/vdb-rs/PATCHES.md),
+/// counted before each node is allocated: twice the largest dense grid, so that a hostile file
+/// of 2 GiB cannot make the reader ask for ~32 GiB.
+pub const MAX_VDB_TREE_BYTES: u64 = 2 * 4 * MAX_DENSE_CELLS;
+
 /// A `.vdb` grid read into a dense grid.
 #[derive(Clone, Debug)]
 pub struct VdbGrid {
@@ -135,6 +141,11 @@ fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, vdb_rs::ParseError>) -> 
         Ok(Err(e @ vdb_rs::ParseError::BadLength { .. })) => {
             Err(VdbError::File(format!("corrupt .vdb file ({what}): {e}")))
         }
+        Ok(Err(vdb_rs::ParseError::TreeTooLarge { budget })) => Err(VdbError::File(format!(
+            "{what} is too large for haze: its tree, every node expanded as the reader holds it, would take \
+             more than {:.1} GiB of memory (a corrupt file, or a grid beyond what haze renders densely)",
+            budget as f64 / (1u64 << 30) as f64
+        ))),
         Ok(Err(e)) => Err(VdbError::File(format!("unreadable .vdb file ({what}): {e}"))),
         // vdb-rs panics on what it does not support (see the module comment).
         Err(p) => Err(VdbError::File(format!(
@@ -146,6 +157,11 @@ fn guarded<T>(what: &str, f: impl FnOnce() -> Result<T, vdb_rs::ParseError>) -> 
 
 /// Parses the bytes of a `.vdb` file; see [`read_vdb`].
 pub fn parse_vdb(bytes: &[u8], name: &str) -> Result<VdbGrid, VdbError> {
+    parse_vdb_within(bytes, name, MAX_VDB_TREE_BYTES)
+}
+
+/// [`parse_vdb`] with the tree's memory budget given ([`MAX_VDB_TREE_BYTES`] there).
+fn parse_vdb_within(bytes: &[u8], name: &str, tree_budget: u64) -> Result<VdbGrid, VdbError> {
     let file_err = |m: String| VdbError::File(m);
     if bytes.len() < 12 {
         return Err(file_err(format!("truncated .vdb header: {} bytes", bytes.len())));
@@ -217,6 +233,7 @@ pub fn parse_vdb(bytes: &[u8], name: &str) -> Result<VdbGrid, VdbError> {
             )));
         }
     }
+    reader.tree_budget = tree_budget;
     let grid = guarded(&format!("grid '{name}'"), || reader.read_grid::<f32>(name))?;
     densify(&grid, &desc.meta_data, name)
 }
@@ -369,4 +386,51 @@ fn check_inactive(grid: &vdb_rs::Grid<f32>) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn smoke() -> Vec<u8> {
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/vdb/smoke.vdb")).unwrap()
+    }
+
+    /// What the tree of `smoke.vdb` takes expanded, by the charge of haze's vdb-rs patch: per
+    /// internal node two masks and one f32 per entry, per leaf one mask and 512 f32.
+    fn expanded_tree_bytes(bytes: &[u8]) -> u64 {
+        let mut reader = VdbReader::new(Cursor::new(bytes)).unwrap();
+        let grid = reader.read_grid::<f32>("density").unwrap();
+        let node = |log2: u32, masks: u64| {
+            let n = 1u64 << (3 * log2);
+            masks * n / 8 + 4 * n
+        };
+        let mut total = 0;
+        for n5 in &grid.tree.root_nodes {
+            total += node(5, 2);
+            for n4 in n5.nodes.values() {
+                total += node(4, 2) + node(3, 1) * n4.nodes.len() as u64;
+            }
+        }
+        total
+    }
+
+    /// The budget holds exactly: the whole expanded tree fits in its own size and not in one
+    /// byte less, and the refusal names the grid and says why.
+    #[test]
+    fn a_tree_beyond_the_budget_is_refused_before_it_is_built() {
+        let bytes = smoke();
+        let need = expanded_tree_bytes(&bytes);
+        // Expanded, the tree is several times the file (what the budget is for).
+        assert!(need > 4 * bytes.len() as u64, "{need} bytes from a file of {}", bytes.len());
+        assert!(parse_vdb_within(&bytes, "density", need).is_ok());
+        assert!(parse_vdb(&bytes, "density").is_ok());
+        match parse_vdb_within(&bytes, "density", need - 1) {
+            Err(VdbError::File(m)) => assert!(
+                m.contains("grid 'density' is too large for haze") && m.contains("GiB of memory"),
+                "{m}"
+            ),
+            other => panic!("{other:?}"),
+        }
+    }
 }

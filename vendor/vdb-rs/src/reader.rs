@@ -65,6 +65,10 @@ pub enum ParseError {
         found: u64,
         expected: u64,
     },
+    // haze: the nodes a file declares, expanded, would exceed the reader's `tree_budget`
+    // (PATCHES.md).
+    #[error("its tree, expanded to full nodes, would take more than {budget} bytes of memory")]
+    TreeTooLarge { budget: u64 },
 }
 
 // haze: a length `len` read from the file, checked against the bytes left in the reader before
@@ -132,6 +136,10 @@ pub struct VdbReader<R: Read + Seek> {
     reader: R,
     pub header: ArchiveHeader,
     pub grid_descriptors: HashMap<String, GridDescriptor>,
+    // haze: most bytes `read_grid` lets a grid's tree take once its nodes are expanded (their
+    // masks and every value), counted as the topology is read, before each node is allocated;
+    // beyond it, `ParseError::TreeTooLarge`. `u64::MAX` (no limit) from `new` (PATCHES.md).
+    pub tree_budget: u64,
 }
 
 impl<R: Read + Seek> VdbReader<R> {
@@ -201,6 +209,7 @@ impl<R: Read + Seek> VdbReader<R> {
             reader,
             header,
             grid_descriptors,
+            tree_budget: u64::MAX, // haze
         })
     }
 
@@ -210,7 +219,7 @@ impl<R: Read + Seek> VdbReader<R> {
     ) -> Result<Grid<ExpectedTy>, ParseError> {
         let grid_descriptor = self.grid_descriptors.get(name).cloned();
         let gd = grid_descriptor.ok_or_else(|| ParseError::InvalidGridName(name.to_owned()))?;
-        Self::read_grid_internal(&self.header, &mut self.reader, gd)
+        Self::read_grid_internal(&self.header, &mut self.reader, gd, self.tree_budget)
     }
 
     pub fn available_grids(&self) -> Vec<String> {
@@ -534,7 +543,20 @@ impl<R: Read + Seek> VdbReader<R> {
         header: &ArchiveHeader,
         gd: &GridDescriptor,
         reader: &mut R,
+        budget: u64, // haze
     ) -> Result<Tree<ValueTy>, ParseError> {
+        // haze: each node is charged, before it is allocated, what it takes expanded: its masks
+        // (child and value masks for internal nodes, the value mask for leaves) and one value per
+        // entry. A file stores a node in far less (masks and only its active values, compressed),
+        // so without this a small hostile file could make the reader allocate ~16x its size and
+        // more (PATCHES.md).
+        let mut left = budget;
+        let mut charge = |log_2_dim: u32, masks: u64| -> Result<(), ParseError> {
+            let n = 1u64 << (3 * log_2_dim);
+            let bytes = masks * (n / 8) + n * std::mem::size_of::<ValueTy>() as u64;
+            left = left.checked_sub(bytes).ok_or(ParseError::TreeTooLarge { budget })?;
+            Ok(())
+        };
         let buffer_count = reader.read_u32::<LittleEndian>()?;
         assert_eq!(buffer_count, 1, "Multi-buffer trees are not supported");
 
@@ -553,6 +575,7 @@ impl<R: Read + Seek> VdbReader<R> {
         for _root_idx in 0..number_of_root_nodes {
             let origin = read_i_vec3(reader)?;
 
+            charge(5, 2)?; // haze
             let node_5 =
                 Self::read_node_header::<ValueTy>(reader, 5 /* 32 * 32 * 32 */, header, gd)?;
             let mut child_5 = HashMap::default();
@@ -566,6 +589,7 @@ impl<R: Read + Seek> VdbReader<R> {
             };
 
             for idx in node_5.child_mask.iter_ones() {
+                charge(4, 2)?; // haze
                 let node_4 = Self::read_node_header::<ValueTy>(
                     reader, 4, /* 16 * 16 * 16 */
                     header, gd,
@@ -581,6 +605,7 @@ impl<R: Read + Seek> VdbReader<R> {
                 };
 
                 for idx in node_4.child_mask.iter_ones() {
+                    charge(3, 1)?; // haze: the mask now, the values in `read_tree_data`
                     let linear_dim = (1 << (3 * 3)) as usize;
 
                     let mut value_mask = bitvec![u64, Lsb0; 0; linear_dim];
@@ -654,6 +679,7 @@ impl<R: Read + Seek> VdbReader<R> {
         header: &ArchiveHeader,
         reader: &mut R,
         gd: GridDescriptor,
+        tree_budget: u64, // haze
     ) -> Result<Grid<ValueTy>, ParseError> {
         // haze: `?` for `.unwrap()` (three times): errors, not panics.
         gd.seek_to_grid(reader)?;
@@ -665,7 +691,7 @@ impl<R: Read + Seek> VdbReader<R> {
 
         if header.file_version >= OPENVDB_FILE_VERSION_GRID_INSTANCING {
             let transform = Self::read_transform(reader)?;
-            let mut tree = Self::read_tree_topology(header, &gd, reader)?;
+            let mut tree = Self::read_tree_topology(header, &gd, reader, tree_budget)?;
             Self::read_tree_data(header, &gd, reader, &mut tree)?;
 
             Ok(Grid {
