@@ -494,6 +494,24 @@ mod tests {
         }
     }
 
+    /// The prefetch reads the slot and pixels that a sample with the same numbers starts from
+    /// (by index, so an index off the tables would panic here), at the edges of `[0, 1]^2`
+    /// too, where the cell wraps around to column 0 or sits in the last row.
+    #[test]
+    fn prefetch_stays_within_the_tables_at_the_edges() {
+        let m = test_map(Mat4::IDENTITY);
+        let edges = [0.0, 1e-7, 0.5, 1.0 - 1e-7, 1.0];
+        for x in edges {
+            for y in edges {
+                m.prefetch(glam::Vec2::new(x, y));
+                let _ = m.sample(glam::Vec2::new(x, y));
+            }
+        }
+        let black = EnvMap::new(2, 3, &[0.0; 18], 1.0, Mat4::IDENTITY).unwrap();
+        black.prefetch(glam::Vec2::new(1.0, 1.0));
+        assert!(black.sample(glam::Vec2::new(0.5, 0.5)).is_none());
+    }
+
     #[test]
     fn sampling_histogram_matches_pdf() {
         let m = test_map(Mat4::from_rotation_z(0.3));
