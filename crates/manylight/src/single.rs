@@ -176,15 +176,17 @@ impl LightPoint {
             Emitter::Point { position, intensity } => {
                 Some(LightPoint { p: *position, kind: LightKind::Point { intensity: *intensity } })
             }
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } => Some(LightPoint {
-                p: to_world.transform_point3(Vec3::ZERO),
-                kind: LightKind::Spot {
-                    to_local: to_world.inverse(),
-                    intensity: *intensity,
-                    cutoff: *cutoff_angle,
-                    beam: *beam_width,
-                },
-            }),
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, to_local, .. } => {
+                Some(LightPoint {
+                    p: to_world.transform_point3(Vec3::ZERO),
+                    kind: LightKind::Spot {
+                        to_local: *to_local,
+                        intensity: *intensity,
+                        cutoff: *cutoff_angle,
+                        beam: *beam_width,
+                    },
+                })
+            }
             Emitter::Area { radiance, .. } => {
                 let s = scene.sample_area_emitter_point(i, u)?;
                 Some(LightPoint {

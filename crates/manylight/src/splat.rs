@@ -207,9 +207,10 @@ impl CausticTracer {
         let (d, pdf_dir) = self.sample_direction(p, u_pick, u_dir)?;
         let le = match &scene.emitters[k as usize] {
             Emitter::Point { intensity, .. } => *intensity,
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } => {
-                let local = to_world.inverse().transform_vector3(d).normalize();
-                *intensity * Emitter::spot_falloff(*cutoff_angle, *beam_width, local)
+            Emitter::Spot { intensity, cutoff_angle, beam_width, to_local, cos_cutoff, cos_beam, .. } => {
+                let local = to_local.transform_vector3(d).normalize();
+                *intensity
+                    * Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, *cos_cutoff, *cos_beam, local)
             }
             Emitter::Area { shape, .. } => {
                 let nn = n?;

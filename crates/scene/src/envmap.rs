@@ -109,9 +109,8 @@ impl Alias {
 /// `[0, 1)`, is returned as a fresh uniform number.
 #[inline]
 fn pick(n: usize, u: f64, slot: impl Fn(usize) -> AliasSlot) -> (usize, f64) {
-    let s = u * n as f64;
-    let k = (s as usize).min(n - 1);
-    let f = s - k as f64;
+    let k = first_slot(n, u);
+    let f = u * n as f64 - k as f64;
     let slot = slot(k);
     let q = slot.q as f64;
     let (k, f) = if f < q { (k, f / q) } else { (slot.alias as usize, (f - q) / (1.0 - q)) };

@@ -270,12 +270,8 @@ impl Scene {
     pub fn sample_emission(&self, u_select: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         use haze_core::sampling::{sample_cosine_hemisphere, sample_uniform_cone, uniform_cone_pdf};
         use haze_core::Frame;
-        let n = self.emitters.len();
-        if n == 0 {
-            return None;
-        }
-        let idx = ((u_select * n as f32) as usize).min(n - 1);
-        let sel = n as f32;
+        let (idx, _) = self.select_emitter(u_select)?;
+        let sel = self.emitters.len() as f32;
         match &self.emitters[idx] {
             Emitter::Point { position, intensity } => Some(EmissionSample {
                 p: *position,
@@ -284,10 +280,10 @@ impl Scene {
                 weight: *intensity * (4.0 * haze_core::PI * sel),
                 emitter: idx as u32,
             }),
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, .. } => {
-                let cos_max = cutoff_angle.cos();
+            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, cos_cutoff, cos_beam, .. } => {
+                let cos_max = *cos_cutoff;
                 let local = sample_uniform_cone(u_dir, cos_max);
-                let f = Emitter::spot_falloff(*cutoff_angle, *beam_width, local);
+                let f = Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, cos_max, *cos_beam, local);
                 let d = to_world.transform_vector3(local).normalize();
                 (f > 0.0).then(|| EmissionSample {
                     p: to_world.transform_point3(Vec3::ZERO),
