@@ -430,6 +430,17 @@ impl Accel {
                         cur = node.children[c];
                         continue;
                     }
+                    // Exactly two: the farther pushed, the nearer taken, the choice the general
+                    // case below makes, without its loop (Embree's `traverseClosestHit` special
+                    // case; 2% fewer ns per query on the rays replayed from the glass peers).
+                    if ORDERED && mask & (mask - 1) == 0 {
+                        let c2 = mask.trailing_zeros() as usize;
+                        let (near, far) = if t_near[c2] < t_near[c] { (c2, c) } else { (c, c2) };
+                        stack[sp] = MaybeUninit::new(Entry { node: node.children[far], t: t_near[far] });
+                        sp += 1;
+                        cur = node.children[near];
+                        continue;
+                    }
                     // Two or more hit children: onto the stack, the nearest swapped to the top
                     // and taken next. The others are popped in any order but each still
                     // pruned by its entry distance (a full insertion sort cost more in branch
