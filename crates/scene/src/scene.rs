@@ -72,6 +72,9 @@ pub struct Scene {
     pub emitters: Vec<Emitter>,
     pub(crate) emitter_tables: EmitterTables,
     accel: Accel,
+    /// Every shape stops shadow rays ([`Shape::blocks_shadow_rays`]: no `null` or thin
+    /// dielectric surface).
+    every_surface_blocks: bool,
 }
 
 impl Scene {
@@ -87,7 +90,25 @@ impl Scene {
     ) -> Self {
         let accel = Accel::build(&shapes);
         let emitter_tables = EmitterTables::new(&emitters, &shapes);
-        Scene { emitter_tables, path, camera, spp, integrator, shapes, media, emitters, accel }
+        let every_surface_blocks = shapes.iter().all(Shape::blocks_shadow_rays);
+        Scene {
+            emitter_tables,
+            path,
+            camera,
+            spp,
+            integrator,
+            shapes,
+            media,
+            emitters,
+            accel,
+            every_surface_blocks,
+        }
+    }
+
+    /// True when every shape stops shadow rays: a shadow ray is then blocked by the first surface
+    /// it meets, whatever it is, and otherwise stays in the medium it started in.
+    pub fn every_surface_blocks(&self) -> bool {
+        self.every_surface_blocks
     }
 
     /// Closest hit with `t` in `(0, ray.t_max)`.

@@ -100,6 +100,19 @@ fn transmittance_impl(
     mut medium: Option<MediumId>,
     mut sampler: Option<&mut Sampler>,
 ) -> Rgb {
+    // Towards a light at infinity (an environment map) from a homogeneous medium that
+    // attenuates every channel, in a scene where every surface blocks: the ray either meets a
+    // surface (blocked) or runs through that medium for ever (`T = 0`), so the answer is zero
+    // without tracing it. Mitsuba traces it: from inside the glass of the dielectric_envmap
+    // peer every environment-map sample was a traversal that could only end at zero.
+    if !dist.is_finite() && scene.every_surface_blocks() {
+        if let Some(m) = medium {
+            let med = scene.medium(m);
+            if med.is_homogeneous() && med.sigma_t.min_component() > 0.0 {
+                return Rgb::ZERO;
+            }
+        }
+    }
     let target = dist.is_finite().then(|| p + d * dist);
     let origin = match n_start {
         Some(n) => offset_origin(p, n, d),
@@ -338,6 +351,10 @@ mod tests {
     }
 
     fn scene(shapes: Vec<Shape>) -> Scene {
+        scene_with_media(shapes, vec![])
+    }
+
+    fn scene_with_media(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>) -> Scene {
         let camera = Camera {
             filter: PixelFilter::Box,
             to_world: Mat4::IDENTITY,
@@ -349,7 +366,7 @@ mod tests {
             height: 1,
         };
         let emitters = vec![Emitter::Area { shape: 1, radiance: Rgb::ONE }];
-        Scene::new(None, camera, 1, IntegratorSpec::default(), shapes, vec![], emitters)
+        Scene::new(None, camera, 1, IntegratorSpec::default(), shapes, media, emitters)
     }
 
     /// Shadow rays from a floor (`y = 0`, offset origin `~1e-4 (1 + |p|)` along `+y`) to a
@@ -380,6 +397,42 @@ mod tests {
                         assert_eq!(tr, Rgb::ZERO, "blocker missed from {p} towards {y}");
                     }
                 }
+            }
+        }
+    }
+
+    /// Shadow rays to infinity from a homogeneous medium in a scene whose surfaces all block
+    /// return zero without being traced; the same rays in the same scene with an extra `null`
+    /// quad far away (which no ray meets, but which makes the scene need the traced answer) give
+    /// the same transmittance: zero where every channel attenuates, whether the ray meets the
+    /// floor or escapes, and one in a channel with `sigma_t = 0` that escapes.
+    #[test]
+    fn shadow_rays_to_infinity_skipped_only_where_the_answer_is_zero() {
+        use haze_core::Phase;
+        let media = |sigma_t: Rgb| {
+            vec![haze_scene::Medium::homogeneous("fog".into(), sigma_t, Rgb::splat(0.5), Phase::Isotropic)]
+        };
+        let floor = quad("floor", -5.0, 5.0, 0.0, true);
+        let light = quad("light", 1.5, 3.0, 0.05, false);
+        let mut null = quad("null", 100.0, 101.0, 50.0, true);
+        null.bsdf = Bsdf::Null;
+        for sigma_t in [Rgb::splat(0.3), Rgb::new(0.3, 0.0, 0.2)] {
+            let blocking = scene_with_media(vec![floor.clone(), light.clone()], media(sigma_t));
+            let traced = scene_with_media(vec![floor.clone(), light.clone(), null.clone()], media(sigma_t));
+            assert!(blocking.every_surface_blocks() && !traced.every_surface_blocks());
+            let p = Vec3::new(0.3, 1.0, 0.2);
+            for d in [
+                Vec3::Y,
+                -Vec3::Y,
+                Vec3::new(1.0, -0.5, 0.3).normalize(),
+                Vec3::new(-0.2, 0.7, 0.1).normalize(),
+            ] {
+                let skipped = transmittance_to(&blocking, p, None, d, f32::INFINITY, Some(0));
+                let full = transmittance_to(&traced, p, None, d, f32::INFINITY, Some(0));
+                assert_eq!(skipped, full, "sigma_t {sigma_t:?} towards {d}");
+                let escapes = d.y > 0.0;
+                let want = if escapes { sigma_t.map(|s| if s > 0.0 { 0.0 } else { 1.0 }) } else { Rgb::ZERO };
+                assert_eq!(full, want, "sigma_t {sigma_t:?} towards {d}");
             }
         }
     }
