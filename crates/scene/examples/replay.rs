@@ -22,6 +22,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => true,
         })
         .collect();
+    let repeat: usize = std::env::var("REPEAT").ok().map_or(1, |s| s.parse().unwrap());
+    let rays: Vec<Ray> = rays.iter().flat_map(|r| std::iter::repeat_n(*r, repeat)).collect();
     let reps: usize = args.get(3).map_or(15, |s| s.parse().unwrap());
     let mut best = f64::INFINITY;
     let mut hits = 0;

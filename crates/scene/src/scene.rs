@@ -75,6 +75,8 @@ pub struct Scene {
     /// Every shape stops shadow rays ([`Shape::blocks_shadow_rays`]: no `null` or thin
     /// dielectric surface).
     every_surface_blocks: bool,
+    /// Every emitter is at infinity (environment maps and constant environments).
+    every_emitter_at_infinity: bool,
 }
 
 impl Scene {
@@ -91,6 +93,7 @@ impl Scene {
         let accel = Accel::build(&shapes);
         let emitter_tables = EmitterTables::new(&emitters, &shapes);
         let every_surface_blocks = shapes.iter().all(Shape::blocks_shadow_rays);
+        let every_emitter_at_infinity = emitters.iter().all(Emitter::is_environment);
         Scene {
             emitter_tables,
             path,
@@ -102,13 +105,28 @@ impl Scene {
             emitters,
             accel,
             every_surface_blocks,
+            every_emitter_at_infinity,
         }
     }
 
-    /// True when every shape stops shadow rays: a shadow ray is then blocked by the first surface
-    /// it meets, whatever it is, and otherwise stays in the medium it started in.
-    pub fn every_surface_blocks(&self) -> bool {
+    /// True when no light reaches infinity from `medium`, or infinity any point in it: every
+    /// shape stops shadow rays, so a ray either meets a surface and is blocked, or stays in
+    /// `medium` for ever, and `medium` is homogeneous and attenuates every channel (`T = 0`
+    /// over an infinite distance). Shadow rays towards environment lights from such a medium
+    /// are then zero without being traced (`nee.rs`); Mitsuba traces them.
+    pub fn infinity_unreachable_from(&self, medium: Option<MediumId>) -> bool {
         self.every_surface_blocks
+            && medium.is_some_and(|m| {
+                let med = self.medium(m);
+                med.is_homogeneous() && med.sigma_t.min_component() > 0.0
+            })
+    }
+
+    /// True when next-event estimation from any point in `medium` is zero: every emitter is at
+    /// infinity, which [`Self::infinity_unreachable_from`] `medium`. volpath then skips the
+    /// emitter sample (drawing its random numbers all the same), not only its shadow ray.
+    pub fn medium_unlit(&self, medium: Option<MediumId>) -> bool {
+        self.every_emitter_at_infinity && self.infinity_unreachable_from(medium)
     }
 
     /// Closest hit with `t` in `(0, ray.t_max)`.

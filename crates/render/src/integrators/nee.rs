@@ -100,18 +100,11 @@ fn transmittance_impl(
     mut medium: Option<MediumId>,
     mut sampler: Option<&mut Sampler>,
 ) -> Rgb {
-    // Towards a light at infinity (an environment map) from a homogeneous medium that
-    // attenuates every channel, in a scene where every surface blocks: the ray either meets a
-    // surface (blocked) or runs through that medium for ever (`T = 0`), so the answer is zero
-    // without tracing it. Mitsuba traces it: from inside the glass of the dielectric_envmap
-    // peer every environment-map sample was a traversal that could only end at zero.
-    if !dist.is_finite() && scene.every_surface_blocks() {
-        if let Some(m) = medium {
-            let med = scene.medium(m);
-            if med.is_homogeneous() && med.sigma_t.min_component() > 0.0 {
-                return Rgb::ZERO;
-            }
-        }
+    // Towards a light at infinity from a medium from which infinity cannot be reached (every
+    // surface blocks, the medium attenuates every channel): zero, whatever the geometry. In the
+    // dielectric_envmap peer every environment-map sample from inside the glass was such a ray.
+    if !dist.is_finite() && scene.infinity_unreachable_from(medium) {
+        return Rgb::ZERO;
     }
     let target = dist.is_finite().then(|| p + d * dist);
     let origin = match n_start {
@@ -355,6 +348,10 @@ mod tests {
     }
 
     fn scene_with_media(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>) -> Scene {
+        scene_with(shapes, media, vec![Emitter::Area { shape: 1, radiance: Rgb::ONE }])
+    }
+
+    fn scene_with(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>, emitters: Vec<Emitter>) -> Scene {
         let camera = Camera {
             filter: PixelFilter::Box,
             to_world: Mat4::IDENTITY,
@@ -365,7 +362,6 @@ mod tests {
             width: 1,
             height: 1,
         };
-        let emitters = vec![Emitter::Area { shape: 1, radiance: Rgb::ONE }];
         Scene::new(None, camera, 1, IntegratorSpec::default(), shapes, media, emitters)
     }
 
@@ -419,7 +415,10 @@ mod tests {
         for sigma_t in [Rgb::splat(0.3), Rgb::new(0.3, 0.0, 0.2)] {
             let blocking = scene_with_media(vec![floor.clone(), light.clone()], media(sigma_t));
             let traced = scene_with_media(vec![floor.clone(), light.clone(), null.clone()], media(sigma_t));
-            assert!(blocking.every_surface_blocks() && !traced.every_surface_blocks());
+            assert_eq!(
+                (blocking.infinity_unreachable_from(Some(0)), traced.infinity_unreachable_from(Some(0))),
+                (sigma_t.min_component() > 0.0, false)
+            );
             let p = Vec3::new(0.3, 1.0, 0.2);
             for d in [
                 Vec3::Y,
@@ -435,5 +434,33 @@ mod tests {
                 assert_eq!(full, want, "sigma_t {sigma_t:?} towards {d}");
             }
         }
+    }
+
+    /// volpath skips next-event estimation in a medium only when every emitter is at infinity
+    /// and infinity cannot be reached from the medium.
+    #[test]
+    fn a_medium_is_unlit_only_when_every_emitter_is_at_infinity() {
+        use haze_core::Phase;
+        let fog = |sigma_t: Rgb| {
+            vec![haze_scene::Medium::homogeneous("fog".into(), sigma_t, Rgb::splat(0.5), Phase::Isotropic)]
+        };
+        let shapes = vec![quad("floor", -5.0, 5.0, 0.0, true), quad("light", 1.5, 3.0, 0.05, false)];
+        let sky = Emitter::Constant { radiance: Rgb::ONE };
+        let area = Emitter::Area { shape: 1, radiance: Rgb::ONE };
+        let unlit = |sigma_t: Rgb, emitters: Vec<Emitter>, medium: Option<u32>| {
+            scene_with(shapes.clone(), fog(sigma_t), emitters).medium_unlit(medium)
+        };
+        assert!(unlit(Rgb::splat(0.3), vec![sky.clone()], Some(0)));
+        assert!(!unlit(Rgb::splat(0.3), vec![sky.clone(), area], Some(0)), "an area light in the scene");
+        assert!(!unlit(Rgb::new(0.3, 0.0, 0.3), vec![sky.clone()], Some(0)), "a channel with sigma_t = 0");
+        assert!(!unlit(Rgb::splat(0.3), vec![sky.clone()], None), "vacuum");
+        let mut null = quad("null", 100.0, 101.0, 50.0, true);
+        null.bsdf = Bsdf::Null;
+        let mut with_null = shapes.clone();
+        with_null.push(null);
+        assert!(
+            !scene_with(with_null, fog(Rgb::splat(0.3)), vec![sky]).medium_unlit(Some(0)),
+            "a null surface"
+        );
     }
 }

@@ -110,7 +110,9 @@ impl Integrator for VolPath {
             // sampler's next numbers are those of its next-event estimation (in a heterogeneous
             // medium delta tracking draws first, and the hint is wasted): an environment map's
             // cache misses for that sample then overlap the traversal below.
-            scene.prefetch_emitter_sample(sampler);
+            if !scene.medium_unlit(medium) {
+                scene.prefetch_emitter_sample(sampler);
+            }
             // The surface interaction only once the path reaches the surface (below).
             let hit = scene.intersect_preliminary(&query);
             let t_surface = hit.map_or(ray.t_max, |h| h.t());
@@ -150,10 +152,15 @@ impl Integrator for VolPath {
                         }
                         let class = Component::classify(medium_events, surface_events);
 
-                        // Next-event estimation, MIS with phase sampling.
-                        if let Some(es) =
-                            scene.sample_emitter_direction(p, sampler.next_1d(), sampler.next_2d())
-                        {
+                        // Next-event estimation, MIS with phase sampling; in a medium no
+                        // emitter can light, only its random numbers (the same stream).
+                        let (u_light, u_dir) = (sampler.next_1d(), sampler.next_2d());
+                        let light = if scene.medium_unlit(medium) {
+                            None
+                        } else {
+                            scene.sample_emitter_direction(p, u_light, u_dir)
+                        };
+                        if let Some(es) = light {
                             let ph = med.phase.eval(ray.d, es.wi);
                             if ph > 0.0 {
                                 let tr =
