@@ -192,11 +192,16 @@ impl Integrator for VolPath {
             let visible = !(depth == 0 && self.hide_emitters);
 
             let Some(h) = hit.map(|h| scene.interaction(&h)) else {
-                if visible {
+                if visible && count_direct {
+                    // Weight 1: no pdf needed (an environment map's pdf is a lookup in its
+                    // sampling table, a cache miss, for every escaping camera or glass path).
+                    for e in scene.emitters.iter().filter(|e| e.is_environment()) {
+                        out.add(class, beta * e.environment_radiance(ray.d) * (1.0 / r.mean()));
+                    }
+                } else if visible {
                     // Each environment emitter is weighted against its own NEE pdf.
                     for (le, pdf) in scene.environment_emission(ray.d) {
-                        let w = if count_direct { 1.0 } else { power_heuristic(last_pdf, pdf) };
-                        out.add(class, beta * le * (w / r.mean()));
+                        out.add(class, beta * le * (power_heuristic(last_pdf, pdf) / r.mean()));
                     }
                 }
                 break;
