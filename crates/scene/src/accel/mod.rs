@@ -187,18 +187,27 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
     }
 }
 
-/// A BVH leaf: its triangles transposed for [`WatertightRay::intersect_packet`] and where each
-/// came from. The hit's shape and primitive are read from here, not from an array indexed by
-/// triangle: the leaf is in cache after its test, another array is a cache miss per hit.
+/// A BVH leaf as the traversal reads it: its triangles transposed for
+/// [`WatertightRay::intersect_packet`] and which of them block shadow rays (176 bytes on x86-64). Where
+/// each triangle came from is in [`LeafIds`], read once per query for the hit: with the ids and
+/// normals in the leaf (256 bytes) every leaf test touched lines of a larger array, and the
+/// queries were slower although the hit's ids then came without a cache miss
+/// (docs/performance.md, "issue 17, eighth part": roughdielectric_spot -5..-7.5%, the rooms
+/// -1..-1.6%).
 #[derive(Clone, Copy, Debug)]
 struct Leaf {
     packet: TriPacket,
+    /// Bit `i` set when triangle `i` stops shadow rays ([`TriRef::blocks`]).
+    blocks: u32,
+}
+
+/// Where the triangles of the leaf with the same index came from.
+#[derive(Clone, Copy, Debug)]
+struct LeafIds {
     ids: [TriId; 4],
     /// Each triangle's [`TriRef::n`], computed once at build: normalising it per hit (a square
     /// root and a division in the chain that ends the query) was a few percent of hg-box.
     normals: [Vec3; 4],
-    /// Bit `i` set when triangle `i` stops shadow rays ([`TriRef::blocks`]).
-    blocks: u32,
 }
 
 /// `$body` with `$k` bound to the query's node-test kernel. The kernel is chosen once per query,
@@ -224,6 +233,8 @@ pub struct Accel {
     bvh: Option<WideBvh>,
     /// Every BVH leaf's triangles as one packet, in [`WideBvh::leaves`]' order.
     leaves: Vec<Leaf>,
+    /// [`LeafIds`] of each of `leaves`.
+    leaf_ids: Vec<LeafIds>,
     analytic: Vec<Analytic>,
     lo: Vec3,
     hi: Vec3,
@@ -258,7 +269,7 @@ fn build_params(triangles: usize) -> BvhBuildParams {
 
 /// One [`Leaf`] per leaf of `bvh`, in its order: `tris` are the triangles in the order of
 /// `bvh.primitive_indices`, which the leaf runs index.
-fn leaf_packets(bvh: &WideBvh, tris: &[TriRef]) -> Vec<Leaf> {
+fn leaf_packets(bvh: &WideBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<LeafIds>) {
     bvh.leaves
         .iter()
         .map(|&(first, count)| {
@@ -269,7 +280,7 @@ fn leaf_packets(bvh: &WideBvh, tris: &[TriRef]) -> Vec<Leaf> {
                 run.get(lane).map_or(TriId::default(), |t| TriId { shape: t.shape, prim: t.prim })
             });
             let normals = std::array::from_fn(|lane| run.get(lane).map_or(Vec3::ZERO, |t| t.n));
-            Leaf { packet: TriPacket::new(&soa), ids, normals, blocks }
+            (Leaf { packet: TriPacket::new(&soa), blocks }, LeafIds { ids, normals })
         })
         .collect()
 }
@@ -328,7 +339,7 @@ impl Accel {
             }
         }
         let (bvh, leaves) = if flat.is_empty() {
-            (None, Vec::new())
+            (None, (Vec::new(), Vec::new()))
         } else {
             let magnitude = flat
                 .iter()
@@ -347,7 +358,8 @@ impl Accel {
             let leaves = leaf_packets(&wide, &tris);
             (Some(wide), leaves)
         };
-        Accel { bvh, leaves, analytic, lo, hi, avx2: Avx2::detect() }
+        let (leaves, leaf_ids) = leaves;
+        Accel { bvh, leaves, leaf_ids, analytic, lo, hi, avx2: Avx2::detect() }
     }
 
     /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
@@ -604,8 +616,9 @@ impl Accel {
         b1: f32,
         b2: f32,
     ) -> SurfaceInteraction {
+        let ids = &self.leaf_ids[leaf as usize];
         let leaf = &self.leaves[leaf as usize];
-        let tri = leaf.ids[lane];
+        let tri = ids.ids[lane];
         let Geometry::Mesh(m) = &shapes[tri.shape as usize].geometry else {
             unreachable!("triangles come from meshes")
         };
@@ -614,7 +627,7 @@ impl Accel {
         let [v0, v1, v2] = [0, 1, 2].map(|j| Vec3::from(v.vertex(j)));
         // Barycentric interpolation is more precise than o + t d far from the origin.
         let p = pull_inside(v0 * b0 + v1 * b1 + v2 * b2, [v0, v1, v2]);
-        let n = leaf.normals[lane];
+        let n = ids.normals[lane];
         // The vertex indices only for meshes with vertex normals or uvs (a cache miss).
         let idx = || m.indices[tri.prim as usize].map(|i| i as usize);
         let ns = match &m.normals {
@@ -766,9 +779,9 @@ impl Accel {
     /// needs to cross a `null` surface (the medium it enters), read from the leaf without the
     /// hit point, shading normal and uv of [`Self::shadow_interaction`] (`n` is the same vector).
     pub fn shadow_crossing(&self, h: &ShadowHit) -> (u32, Vec3) {
-        let leaf = &self.leaves[(h.tri / 4) as usize];
+        let ids = &self.leaf_ids[(h.tri / 4) as usize];
         let lane = (h.tri % 4) as usize;
-        (leaf.ids[lane].shape, leaf.normals[lane])
+        (ids.ids[lane].shape, ids.normals[lane])
     }
 }
 
