@@ -109,8 +109,8 @@ impl Scene {
         }
     }
 
-    /// True when no light reaches infinity from `medium`, or infinity any point in it: every
-    /// shape stops shadow rays, so a ray either meets a surface and is blocked, or stays in
+    /// True when light from infinity cannot reach any point in `medium`: every shape stops
+    /// shadow rays, so a ray from the point either meets a surface and is blocked or stays in
     /// `medium` for ever, and `medium` is homogeneous and attenuates every channel (`T = 0`
     /// over an infinite distance). Shadow rays towards environment lights from such a medium
     /// are then zero without being traced (`nee.rs`); Mitsuba traces them.
@@ -123,8 +123,9 @@ impl Scene {
     }
 
     /// True when next-event estimation from any point in `medium` is zero: every emitter is at
-    /// infinity, which [`Self::infinity_unreachable_from`] `medium`. volpath then skips the
-    /// emitter sample (drawing its random numbers all the same), not only its shadow ray.
+    /// infinity and infinity is unreachable from `medium` ([`Self::infinity_unreachable_from`]).
+    /// volpath then skips the emitter sample (drawing its random numbers all the same), not only
+    /// its shadow ray.
     pub fn medium_unlit(&self, medium: Option<MediumId>) -> bool {
         self.every_emitter_at_infinity && self.infinity_unreachable_from(medium)
     }
