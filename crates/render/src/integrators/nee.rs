@@ -397,6 +397,16 @@ mod tests {
         }
     }
 
+    /// One homogeneous, isotropic medium of extinction `sigma_t`.
+    fn fog(sigma_t: Rgb) -> Vec<haze_scene::Medium> {
+        vec![haze_scene::Medium::homogeneous(
+            "fog".into(),
+            sigma_t,
+            Rgb::splat(0.5),
+            haze_core::Phase::Isotropic,
+        )]
+    }
+
     /// Shadow rays to infinity from a homogeneous medium in a scene whose surfaces all block
     /// return zero without being traced; the same rays in the same scene with an extra `null`
     /// quad far away (which no ray meets, but which makes the scene need the traced answer) give
@@ -404,17 +414,13 @@ mod tests {
     /// floor or escapes, and one in a channel with `sigma_t = 0` that escapes.
     #[test]
     fn shadow_rays_to_infinity_skipped_only_where_the_answer_is_zero() {
-        use haze_core::Phase;
-        let media = |sigma_t: Rgb| {
-            vec![haze_scene::Medium::homogeneous("fog".into(), sigma_t, Rgb::splat(0.5), Phase::Isotropic)]
-        };
         let floor = quad("floor", -5.0, 5.0, 0.0, true);
         let light = quad("light", 1.5, 3.0, 0.05, false);
         let mut null = quad("null", 100.0, 101.0, 50.0, true);
         null.bsdf = Bsdf::Null;
         for sigma_t in [Rgb::splat(0.3), Rgb::new(0.3, 0.0, 0.2)] {
-            let blocking = scene_with_media(vec![floor.clone(), light.clone()], media(sigma_t));
-            let traced = scene_with_media(vec![floor.clone(), light.clone(), null.clone()], media(sigma_t));
+            let blocking = scene_with_media(vec![floor.clone(), light.clone()], fog(sigma_t));
+            let traced = scene_with_media(vec![floor.clone(), light.clone(), null.clone()], fog(sigma_t));
             assert_eq!(
                 (blocking.infinity_unreachable_from(Some(0)), traced.infinity_unreachable_from(Some(0))),
                 (sigma_t.min_component() > 0.0, false)
@@ -440,10 +446,6 @@ mod tests {
     /// and infinity cannot be reached from the medium.
     #[test]
     fn a_medium_is_unlit_only_when_every_emitter_is_at_infinity() {
-        use haze_core::Phase;
-        let fog = |sigma_t: Rgb| {
-            vec![haze_scene::Medium::homogeneous("fog".into(), sigma_t, Rgb::splat(0.5), Phase::Isotropic)]
-        };
         let shapes = vec![quad("floor", -5.0, 5.0, 0.0, true), quad("light", 1.5, 3.0, 0.05, false)];
         let sky = Emitter::Constant { radiance: Rgb::ONE };
         let area = Emitter::Area { shape: 1, radiance: Rgb::ONE };

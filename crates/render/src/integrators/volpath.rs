@@ -110,7 +110,10 @@ impl Integrator for VolPath {
             // sampler's next numbers are those of its next-event estimation (in a heterogeneous
             // medium delta tracking draws first, and the hint is wasted): an environment map's
             // cache misses for that sample then overlap the traversal below.
-            if !scene.medium_unlit(medium) {
+            // No emitter can light a point in this medium: its next-event estimation below is
+            // skipped, and so is the hint.
+            let unlit = scene.medium_unlit(medium);
+            if !unlit {
                 scene.prefetch_emitter_sample(sampler);
             }
             // The surface interaction only once the path reaches the surface (below).
@@ -155,11 +158,8 @@ impl Integrator for VolPath {
                         // Next-event estimation, MIS with phase sampling; in a medium no
                         // emitter can light, only its random numbers (the same stream).
                         let (u_light, u_dir) = (sampler.next_1d(), sampler.next_2d());
-                        let light = if scene.medium_unlit(medium) {
-                            None
-                        } else {
-                            scene.sample_emitter_direction(p, u_light, u_dir)
-                        };
+                        let light =
+                            if unlit { None } else { scene.sample_emitter_direction(p, u_light, u_dir) };
                         if let Some(es) = light {
                             let ph = med.phase.eval(ray.d, es.wi);
                             if ph > 0.0 {

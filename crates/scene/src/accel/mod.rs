@@ -188,10 +188,10 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
 }
 
 /// A BVH leaf as the traversal reads it: its triangles transposed for
-/// [`WatertightRay::intersect_packet`] and which of them block shadow rays (176 bytes on x86-64). Where
-/// each triangle came from is in [`LeafIds`], read once per query for the hit: with the ids and
-/// normals in the leaf (256 bytes) every leaf test touched lines of a larger array, and the
-/// queries were slower although the hit's ids then came without a cache miss
+/// [`WatertightRay::intersect_packet`] and which of them block shadow rays (176 bytes on
+/// x86-64). Where each triangle came from is in [`LeafIds`], read once per query for the hit:
+/// with the ids and normals in the leaf (256 bytes) every leaf test touched lines of a larger
+/// array, and the queries were slower although the hit's ids then came without a cache miss
 /// (docs/performance.md, "issue 17, eighth part": roughdielectric_spot -5..-7.5%, the rooms
 /// -1..-1.6%).
 #[derive(Clone, Copy, Debug)]
@@ -338,7 +338,7 @@ impl Accel {
                 }
             }
         }
-        let (bvh, leaves) = if flat.is_empty() {
+        let (bvh, (leaves, leaf_ids)) = if flat.is_empty() {
             (None, (Vec::new(), Vec::new()))
         } else {
             let magnitude = flat
@@ -358,7 +358,6 @@ impl Accel {
             let leaves = leaf_packets(&wide, &tris);
             (Some(wide), leaves)
         };
-        let (leaves, leaf_ids) = leaves;
         Accel { bvh, leaves, leaf_ids, analytic, lo, hi, avx2: Avx2::detect() }
     }
 

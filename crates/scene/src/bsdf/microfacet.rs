@@ -152,7 +152,7 @@ impl Microfacet {
                 // the time for slopes no f32 direction resolves.
                 let cdf = BeckmannSlopeCdf::new(cos_theta_i);
                 let x = u.x.clamp(1e-6, 1.0 - 1e-7);
-                let slope = cdf.invert(x, beckmann_table().guess(cos_theta_i, x), 1e-5, 9);
+                let (_, slope) = cdf.solve(x, beckmann_table().guess(cos_theta_i, x), 1e-5, 9);
                 let y = (2.0 * u.y - 1.0).clamp(-1.0 + 1e-7, 1.0 - 1e-7);
                 Vec2::new(slope, erfinv(y))
             }
@@ -200,15 +200,10 @@ impl BeckmannSlopeCdf {
         self.norm * (1.0 + b + INV_SQRT_PI * self.tan_theta_i * (-inv * inv).exp())
     }
 
-    /// The slope `x` with `C(erf(x)) = u` to within `tol`: Newton steps on `b` from `b`,
-    /// safeguarded by bisection (a step leaving the bracket is replaced by its midpoint), at most
-    /// `steps` evaluations (Mitsuba 3's `sample_visible_11` stops at 1e-5 or after its steps).
-    #[inline]
-    fn invert(&self, u: f32, b: f32, tol: f32, steps: u32) -> f32 {
-        self.solve(u, b, tol, steps).1
-    }
-
-    /// [`Self::invert`], returning `b` with the slope.
+    /// `b` and the slope `x = erfinv(b)` with `C(b) = u` to within `tol`: Newton steps on `b`
+    /// from `b`, safeguarded by bisection (a step leaving the bracket is replaced by its
+    /// midpoint), at most `steps` evaluations (Mitsuba 3's `sample_visible_11` stops at 1e-5
+    /// or after its steps).
     #[inline]
     fn solve(&self, u: f32, mut b: f32, tol: f32, steps: u32) -> (f32, f32) {
         // The bracket stops one f32 short of -1 and 1, where `erfinv` is infinite.
