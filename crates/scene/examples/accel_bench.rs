@@ -1,12 +1,15 @@
 //! Ray-query throughput of a scene's acceleration structure, without shading: closest hits
 //! (`intersect`) and shadow segments (`shadow_hits`) from seeded random points in the scene's
-//! bounds. For measuring traversal changes (docs/performance.md), not a test.
+//! bounds, and shadow segments from the closest hits' points (rays leaving a surface, as in
+//! next-event estimation at a surface) to the same random points. For measuring traversal
+//! changes (docs/performance.md), not a test.
 //!
 //!     cargo run --release -p haze-scene --example accel_bench -- SCENE.xml [RAYS]
 
 use glam::Vec3;
+use haze_core::ray::offset_origin;
 use haze_core::{sampling::sample_uniform_sphere, Ray, Sampler};
-use haze_scene::accel::{ShadowHit, MAX_SHADOW_HITS};
+use haze_scene::accel::{ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use haze_scene::xml::{load_file, LoadOptions};
 use std::time::Instant;
 
@@ -34,8 +37,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let t0 = cpu_seconds(start);
     let mut hits = 0usize;
-    for &(o, d, _) in &queries {
-        hits += scene.intersect(&Ray::new(o, d)).is_some() as usize;
+    let mut surface = Vec::new();
+    for &(o, d, p) in &queries {
+        if let Some(h) = scene.intersect(&Ray::new(o, d)) {
+            hits += 1;
+            surface.push((h.p, h.n, p));
+        }
     }
     let closest = cpu_seconds(start) - t0;
 
@@ -46,14 +53,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let v = p - o;
         let len = v.length();
         let ray = Ray { t_max: len * (1.0 - 1e-4), ..Ray::new(o, v / len) };
-        blocked +=
-            matches!(scene.shadow_hits(&ray, &mut buf), haze_scene::accel::ShadowQuery::Blocked) as usize;
+        blocked += matches!(scene.shadow_hits(&ray, &mut buf), ShadowQuery::Blocked) as usize;
     }
     let shadow = cpu_seconds(start) - t0;
+
+    let t0 = cpu_seconds(start);
+    let mut surface_blocked = 0usize;
+    for &(p, n, target) in &surface {
+        let v = target - p;
+        let d = v.normalize();
+        let o = offset_origin(p, n, d);
+        let ray = Ray { t_max: (target - o).length() * (1.0 - 1e-4), ..Ray::new(o, d) };
+        surface_blocked += matches!(scene.shadow_hits(&ray, &mut buf), ShadowQuery::Blocked) as usize;
+    }
+    let from_surface = cpu_seconds(start) - t0;
     println!(
-        "closest: {:.1} ns/ray ({hits} hits); shadow: {:.1} ns/ray ({blocked} blocked)",
+        "closest: {:.1} ns/ray ({hits} hits); shadow: {:.1} ns/ray ({blocked} blocked); \
+         shadow from the hits: {:.1} ns/ray ({surface_blocked} blocked)",
         closest * 1e9 / rays as f64,
-        shadow * 1e9 / rays as f64
+        shadow * 1e9 / rays as f64,
+        from_surface * 1e9 / surface.len().max(1) as f64
     );
     Ok(())
 }

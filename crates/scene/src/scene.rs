@@ -7,7 +7,7 @@ use crate::emitter::Emitter;
 use crate::emitter_tables::EmitterTables;
 use crate::interaction::SurfaceInteraction;
 use crate::medium::{Medium, MediumId};
-use crate::shape::Shape;
+use crate::shape::{closed, Shape};
 use glam::Vec3;
 use haze_core::Ray;
 use std::path::PathBuf;
@@ -77,6 +77,56 @@ pub struct Scene {
     every_surface_blocks: bool,
     /// Every emitter is at infinity (environment maps and constant environments).
     every_emitter_at_infinity: bool,
+    /// Per shape: the sign that turns its hits' geometric normals outwards when the shape is
+    /// sealed ([`sealed_shapes`]), 0 when it is not.
+    sealed: Vec<f32>,
+    /// Per medium: it is sealed ([`sealed_media`]).
+    sealed_media: Vec<bool>,
+}
+
+/// [`Scene::sealed`]: a shape is sealed when it is a closed surface
+/// ([`crate::shape::closed::outward_sign`]) that stops shadow rays and holds no emitter: every
+/// emitter is a point or spot light certainly outside it ([`crate::shape::closed::contains`]),
+/// or at infinity. Any area emitter makes no shape sealed (whether an emitting surface lies
+/// inside another is not decided). Only shapes where the answer is used are examined: those
+/// whose BSDF next-event estimation samples (not specular: [`Scene::towards_sealed_inside`])
+/// and those with an interior medium ([`sealed_media`]).
+fn sealed_shapes(shapes: &[Shape], emitters: &[Emitter]) -> Vec<f32> {
+    let mut points = Vec::new();
+    for e in emitters {
+        match e {
+            Emitter::Point { position, .. } => points.push(*position),
+            Emitter::Spot { to_world, .. } => points.push(to_world.transform_point3(Vec3::ZERO)),
+            Emitter::Constant { .. } | Emitter::EnvMap(_) => {}
+            Emitter::Area { .. } => return vec![0.0; shapes.len()],
+        }
+    }
+    shapes
+        .iter()
+        .map(|s| {
+            if !s.blocks_shadow_rays() || s.bsdf.is_specular() && s.interior.is_none() {
+                return 0.0;
+            }
+            closed::outward_sign_if_outside(&s.geometry, &points).unwrap_or(0.0)
+        })
+        .collect()
+}
+
+/// [`Scene::sealed_media`]: a medium is sealed when the camera is not in it and it is the
+/// interior, and nowhere an exterior, of at least one shape, all of them sealed. A path in it
+/// entered it through one of those shapes towards its inside (media change only at shapes that
+/// declare them) and is inside that shape until it crosses it again, so every shadow ray from
+/// it must cross a sealed surface: next-event estimation from it is zero.
+fn sealed_media(shapes: &[Shape], sealed: &[f32], media: usize, camera: Option<MediumId>) -> Vec<bool> {
+    (0..media as MediumId)
+        .map(|m| {
+            let mut bounds =
+                shapes.iter().zip(sealed).filter(|(s, _)| s.interior == Some(m) || s.exterior == Some(m));
+            camera != Some(m)
+                && shapes.iter().any(|s| s.interior == Some(m))
+                && bounds.all(|(s, &sign)| s.interior == Some(m) && s.exterior != Some(m) && sign != 0.0)
+        })
+        .collect()
 }
 
 impl Scene {
@@ -94,6 +144,8 @@ impl Scene {
         let emitter_tables = EmitterTables::new(&emitters, &shapes);
         let every_surface_blocks = shapes.iter().all(Shape::blocks_shadow_rays);
         let every_emitter_at_infinity = emitters.iter().all(Emitter::is_environment);
+        let sealed = sealed_shapes(&shapes, &emitters);
+        let sealed_media = sealed_media(&shapes, &sealed, media.len(), camera.medium);
         Scene {
             emitter_tables,
             path,
@@ -106,7 +158,21 @@ impl Scene {
             accel,
             every_surface_blocks,
             every_emitter_at_infinity,
+            sealed,
+            sealed_media,
         }
+    }
+
+    /// True when a shadow ray leaving shape `shape` at a hit with geometric normal `n` in
+    /// direction `d` is certainly blocked: the shape is sealed ([`sealed_shapes`]) and `d` points
+    /// into it. The ray starts inside a closed surface that stops shadow rays and must leave it
+    /// to reach any emitter, all of which are outside (`shape::closed`). In the roughdielectric
+    /// peer, every light sample at a hit on a glass sphere towards the sphere's inside (for the
+    /// refracted or internally reflected lobe) was such a ray; Mitsuba traces them.
+    #[inline]
+    pub fn towards_sealed_inside(&self, shape: u32, n: Vec3, d: Vec3) -> bool {
+        let s = self.sealed[shape as usize];
+        s != 0.0 && s * n.dot(d) < 0.0
     }
 
     /// True when light from infinity cannot reach any point in `medium`: every shape stops
@@ -123,11 +189,13 @@ impl Scene {
     }
 
     /// True when next-event estimation from any point in `medium` is zero: every emitter is at
-    /// infinity and infinity is unreachable from `medium` ([`Self::infinity_unreachable_from`]).
-    /// volpath then skips the emitter sample (drawing its random numbers all the same), not only
-    /// its shadow ray.
+    /// infinity and infinity is unreachable from `medium` ([`Self::infinity_unreachable_from`]),
+    /// or the medium is sealed ([`sealed_media`]: it is inside closed surfaces that stop shadow
+    /// rays, and every emitter is outside them). volpath then skips the emitter sample (drawing
+    /// its random numbers all the same), not only its shadow ray.
     pub fn medium_unlit(&self, medium: Option<MediumId>) -> bool {
-        self.every_emitter_at_infinity && self.infinity_unreachable_from(medium)
+        medium.is_some_and(|m| self.sealed_media[m as usize])
+            || self.every_emitter_at_infinity && self.infinity_unreachable_from(medium)
     }
 
     /// Closest hit with `t` in `(0, ray.t_max)`.

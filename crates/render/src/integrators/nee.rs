@@ -226,6 +226,9 @@ pub fn surface_nee(
     else {
         return Rgb::ZERO;
     };
+    if scene.towards_sealed_inside(h.shape, h.n, es.wi) {
+        return Rgb::ZERO;
+    }
     let wo = frame.to_local(es.wi);
     let f = shape.bsdf.eval(wi, wo, h.uv);
     if f.is_black() {
@@ -464,5 +467,101 @@ mod tests {
             !scene_with(with_null, fog(Rgb::splat(0.3)), vec![sky]).medium_unlit(Some(0)),
             "a null surface"
         );
+    }
+
+    /// A closed cube `[-1, 1]^3` (24 vertices, unshared between faces: welded by position),
+    /// diffuse, with medium 0 inside.
+    fn box_with_fog_inside() -> Shape {
+        Shape {
+            name: "box".into(),
+            geometry: Geometry::Mesh(haze_scene::shape::cube_mesh(&Mat4::IDENTITY, false)),
+            bsdf: Bsdf::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) },
+            interior: Some(0),
+            exterior: None,
+            emitter: None,
+        }
+    }
+
+    /// The geometric claim behind `Scene::towards_sealed_inside`, checked against the tracer: from
+    /// points on a sealed box, every shadow ray aimed into the box at a point outside it is
+    /// blocked when traced, and the skip is claimed for exactly the rays that point inwards.
+    #[test]
+    fn shadow_rays_into_a_sealed_shape_are_all_blocked() {
+        let light = Emitter::Point { position: Vec3::new(0.3, 4.0, -0.2), intensity: Rgb::ONE };
+        let sc = scene_with(vec![box_with_fog_inside()], fog(Rgb::splat(0.2)), vec![light]);
+        let Geometry::Mesh(m) = &sc.shapes[0].geometry else { unreachable!() };
+        let mut s = haze_core::Sampler::from_seed(17);
+        let (mut inward, mut outward) = (0, 0);
+        for _ in 0..4000 {
+            let i = (s.next_1d() * m.indices.len() as f32) as usize % m.indices.len();
+            let [a, b, c] = m.vertices(i);
+            let (u, v) = (s.next_1d(), s.next_1d());
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let p = a + (b - a) * u + (c - a) * v;
+            let n = m.face_normal(i);
+            // A target outside the box, in any direction: largest coordinate 1.2 to 4.2.
+            let dir = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+            let target = dir / dir.abs().max_element() * (1.2 + 3.0 * s.next_1d());
+            let v = target - p;
+            let (d, dist) = (v.normalize(), v.length());
+            let skip = sc.towards_sealed_inside(0, n, d);
+            assert_eq!(skip, n.dot(d) < 0.0, "from {p} (n {n}) towards {target}");
+            let medium = sc.shapes[0].medium_towards(d, n, None);
+            let tr = transmittance_to(&sc, p, Some(n), d, dist, medium);
+            if skip {
+                assert_eq!(tr, Rgb::ZERO, "an inward ray from {p} (n {n}) reached {target}");
+                inward += 1;
+            } else {
+                outward += usize::from(tr != Rgb::ZERO);
+            }
+        }
+        assert!(inward > 1000 && outward > 1000, "{inward} inward, {outward} unblocked outward");
+    }
+
+    /// A shape is sealed only when it is closed, stops shadow rays and every emitter is a point
+    /// or spot light outside it or at infinity; a medium only when it is inside sealed shapes
+    /// alone and the camera is not in it. volpath then skips next-event estimation in it.
+    #[test]
+    fn sealed_shapes_and_media_only_where_no_emitter_is_reachable() {
+        let outside = Emitter::Point { position: Vec3::new(0.3, 4.0, -0.2), intensity: Rgb::ONE };
+        let inside = Emitter::Point { position: Vec3::new(0.3, 0.4, -0.2), intensity: Rgb::ONE };
+        let sky = Emitter::Constant { radiance: Rgb::ONE };
+        let (n, d) = (-Vec3::Y, Vec3::Y);
+        let check = |shapes: Vec<Shape>, emitters: Vec<Emitter>| {
+            let sc = scene_with(shapes, fog(Rgb::splat(0.2)), emitters);
+            (sc.towards_sealed_inside(0, n, d), sc.medium_unlit(Some(0)))
+        };
+        assert_eq!(check(vec![box_with_fog_inside()], vec![outside.clone()]), (true, true));
+        assert_eq!(check(vec![box_with_fog_inside()], vec![outside.clone(), sky.clone()]), (true, true));
+        assert_eq!(check(vec![box_with_fog_inside()], vec![outside.clone(), inside]), (false, false));
+        // An area light anywhere (here a quad far outside).
+        let lamp = quad("lamp", 10.0, 11.0, 10.0, false);
+        let area = Emitter::Area { shape: 1, radiance: Rgb::ONE };
+        assert_eq!(check(vec![box_with_fog_inside(), lamp], vec![outside.clone(), area]), (false, false));
+        // A surface that lets shadow rays through, and an open box.
+        let mut null = box_with_fog_inside();
+        null.bsdf = Bsdf::Null;
+        assert_eq!(check(vec![null], vec![outside.clone()]), (false, false));
+        let mut open = box_with_fog_inside();
+        let Geometry::Mesh(m) = &mut open.geometry else { unreachable!() };
+        m.indices.pop();
+        assert_eq!(check(vec![open], vec![outside.clone()]), (false, false));
+        // The medium also outside another shape, or around the camera: the box stays sealed,
+        // the medium does not.
+        let mut shell = quad("shell", 20.0, 21.0, 0.0, true);
+        shell.exterior = Some(0);
+        assert_eq!(check(vec![box_with_fog_inside(), shell], vec![outside.clone()]), (true, false));
+        let mut camera = scene_with(vec![], vec![], vec![]).camera;
+        camera.medium = Some(0);
+        let sc = Scene::new(
+            None,
+            camera,
+            1,
+            IntegratorSpec::default(),
+            vec![box_with_fog_inside()],
+            fog(Rgb::splat(0.2)),
+            vec![outside],
+        );
+        assert!(!sc.medium_unlit(Some(0)), "the camera in the medium");
     }
 }

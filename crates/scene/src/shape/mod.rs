@@ -2,6 +2,7 @@
 //! `disk`, each with its BSDF, optional interior/exterior media and optional area emitter.
 
 pub mod analytic;
+pub mod closed;
 mod mesh;
 mod primitives;
 mod sample;
