@@ -12,6 +12,7 @@ fn bench_from_empty_dir(exe: &PathBuf, tag: &str) -> String {
     let dir = std::env::temp_dir().join(format!("haze-bench-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let out = Command::new(exe).args(["bench", "--integrator", "none"]).current_dir(&dir).output().unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
     assert!(!out.status.success());
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
@@ -31,6 +32,7 @@ fn missing_default_scenes_are_a_clear_error() {
     let exe = dir.join("haze");
     std::fs::copy(HAZE, &exe).unwrap();
     let err = bench_from_empty_dir(&exe, "installed");
+    std::fs::remove_dir_all(&dir).unwrap();
     assert!(err.contains("default scene tests/data/validation/scenes/hg-box.xml was not found"), "{err}");
     assert!(err.contains("give the scene files as arguments"), "{err}");
 }

@@ -112,6 +112,7 @@ mod tests {
         bad.data[4] = f32::NAN;
         let err = bad.write_exr(&dir.join("b.exr")).unwrap_err().to_string();
         assert!(err.contains("pixel (1, 0) is not finite"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

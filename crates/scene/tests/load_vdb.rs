@@ -192,7 +192,8 @@ fn half_floats_are_the_float_grid_rounded() {
 
 /// A fresh directory for one test's files.
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("haze-vdb-{}-{name}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("haze-vdb-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

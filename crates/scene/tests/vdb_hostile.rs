@@ -102,7 +102,8 @@ fn mutate(good: &[u8], fields: &[(usize, usize)], s: &mut Sampler) -> (Vec<u8>, 
 
 #[test]
 fn mutated_vdb_files_load_or_fail_cleanly() {
-    let dir = std::env::temp_dir().join(format!("haze-vdb-hostile-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("haze-vdb-hostile-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let grid = dir.join("grid.vdb");
     let scene = dir.join("scene.xml");

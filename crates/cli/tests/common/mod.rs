@@ -18,9 +18,13 @@ pub fn data(rel: &str) -> PathBuf {
     repo("tests/data").join(rel)
 }
 
-/// A folder of its own for one test, `name`, inside this test process's temporary folder.
+/// A folder of its own for one test, `name`, inside this test process's temporary folder. Under
+/// the target directory (`CARGO_TARGET_TMPDIR`), not the system's temporary folder, which the
+/// test runs would otherwise fill with one folder per process; `cargo clean` removes them.
 pub fn tmp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("haze-cli-tests-{}", std::process::id())).join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("haze-cli-tests-{}", std::process::id()))
+        .join(name);
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
