@@ -354,8 +354,9 @@ mod tests {
         scene_with(shapes, media, vec![Emitter::Area { shape: 1, radiance: Rgb::ONE }])
     }
 
-    fn scene_with(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>, emitters: Vec<Emitter>) -> Scene {
-        let camera = Camera {
+    /// A one-pixel camera at the origin, in vacuum.
+    fn camera() -> Camera {
+        Camera {
             filter: PixelFilter::Box,
             to_world: Mat4::IDENTITY,
             fov_x_deg: 30.0,
@@ -364,8 +365,11 @@ mod tests {
             medium: None,
             width: 1,
             height: 1,
-        };
-        Scene::new(None, camera, 1, IntegratorSpec::default(), shapes, media, emitters)
+        }
+    }
+
+    fn scene_with(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>, emitters: Vec<Emitter>) -> Scene {
+        Scene::new(None, camera(), 1, IntegratorSpec::default(), shapes, media, emitters)
     }
 
     /// Shadow rays from a floor (`y = 0`, offset origin `~1e-4 (1 + |p|)` along `+y`) to a
@@ -551,11 +555,9 @@ mod tests {
         let mut shell = quad("shell", 20.0, 21.0, 0.0, true);
         shell.exterior = Some(0);
         assert_eq!(check(vec![box_with_fog_inside(), shell], vec![outside.clone()]), (true, false));
-        let mut camera = scene_with(vec![], vec![], vec![]).camera;
-        camera.medium = Some(0);
         let sc = Scene::new(
             None,
-            camera,
+            Camera { medium: Some(0), ..camera() },
             1,
             IntegratorSpec::default(),
             vec![box_with_fog_inside()],
