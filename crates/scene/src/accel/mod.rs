@@ -3,10 +3,11 @@
 //! a watertight triangle test; analytic spheres and disks tested directly (scenes have few of
 //! them).
 //!
-//! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide tree traversal reads
+//! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide trees traversal reads
 //! and the traversal are ours (docs/performance.md, "Traversal of the peer scenes", "Front-to-back
 //! traversal and per-query costs" and "issue 17, fourth part"): [`wide`] collapses the binary
-//! tree into nodes of 8 f32 child boxes tested at once (in one AVX2 vector per plane where the
+//! tree twice over the same leaves (one collapse for closest hits, one for shadow rays: "issue
+//! 17, tenth part") into nodes of 8 f32 child boxes tested at once (in one AVX2 vector per plane where the
 //! CPU has AVX2, detected when the `Accel` is built, else in two SSE vectors: "issue 17, fifth
 //! part"), the loop
 //! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
@@ -37,7 +38,7 @@ mod watertight;
 mod wide;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
-use wide::{Avx2, NodeTest, WideBvh, LEAF, LEAF_SIZE, WIDTH};
+use wide::{Avx2, NodeTest, WideBvh, WideTree, LEAF, LEAF_SIZE, WIDTH};
 
 use crate::interaction::SurfaceInteraction;
 use crate::shape::analytic::{intersect_disk, intersect_sphere};
@@ -187,6 +188,23 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
     }
 }
 
+/// Asks the CPU to bring `x`'s two cache lines (a [`LeafIds`]) into L1; no-op elsewhere.
+#[inline(always)]
+fn prefetch(x: &LeafIds) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let p = (x as *const LeafIds).cast::<i8>();
+        // SAFETY: a prefetch is a hint; it never faults, and both addresses are inside `x`.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.add(64));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 /// A BVH leaf as the traversal reads it: its triangles transposed for
 /// [`WatertightRay::intersect_packet`] and which of them block shadow rays (176 bytes on
 /// x86-64). Where each triangle came from is in [`LeafIds`], read once per query for the hit:
@@ -201,13 +219,19 @@ struct Leaf {
     blocks: u32,
 }
 
-/// Where the triangles of the leaf with the same index came from.
+/// Where the triangles of the leaf with the same index came from: two cache lines, which the
+/// closest-hit query prefetches when it finds a hit, so that the surface interaction built
+/// after it (often at once) does not wait for them.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 struct LeafIds {
     ids: [TriId; 4],
     /// Each triangle's [`TriRef::n`], computed once at build: normalising it per hit (a square
     /// root and a division in the chain that ends the query) was a few percent of hg-box.
     normals: [Vec3; 4],
+    /// Each triangle's vertex indices in its mesh (for vertex normals and uvs), copied here so
+    /// that the interaction's loads of those do not wait for a load of the mesh's index array.
+    indices: [[u32; 3]; 4],
 }
 
 /// `$body` with `$k` bound to the query's node-test kernel. The kernel is chosen once per query,
@@ -269,7 +293,11 @@ fn build_params(triangles: usize) -> BvhBuildParams {
 
 /// One [`Leaf`] per leaf of `bvh`, in its order: `tris` are the triangles in the order of
 /// `bvh.primitive_indices`, which the leaf runs index.
-fn leaf_packets(bvh: &WideBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<LeafIds>) {
+fn leaf_packets(bvh: &WideBvh, tris: &[TriRef], shapes: &[Shape]) -> (Vec<Leaf>, Vec<LeafIds>) {
+    let indices = |t: &TriRef| match &shapes[t.shape as usize].geometry {
+        Geometry::Mesh(m) => m.indices[t.prim as usize],
+        _ => unreachable!("triangles come from meshes"),
+    };
     bvh.leaves
         .iter()
         .map(|&(first, count)| {
@@ -280,7 +308,8 @@ fn leaf_packets(bvh: &WideBvh, tris: &[TriRef]) -> (Vec<Leaf>, Vec<LeafIds>) {
                 run.get(lane).map_or(TriId::default(), |t| TriId { shape: t.shape, prim: t.prim })
             });
             let normals = std::array::from_fn(|lane| run.get(lane).map_or(Vec3::ZERO, |t| t.n));
-            (Leaf { packet: TriPacket::new(&soa), blocks }, LeafIds { ids, normals })
+            let indices = std::array::from_fn(|lane| run.get(lane).map_or([0; 3], indices));
+            (Leaf { packet: TriPacket::new(&soa), blocks }, LeafIds { ids, normals, indices })
         })
         .collect()
 }
@@ -355,7 +384,7 @@ impl Accel {
                 .collect();
             let wide = WideBvh::new(build_bvh2(&boxes, build_params(flat.len()), &mut Default::default()));
             let tris: Vec<TriRef> = wide.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
-            let leaves = leaf_packets(&wide, &tris);
+            let leaves = leaf_packets(&wide, &tris, shapes);
             (Some(wide), leaves)
         };
         Accel { bvh, leaves, leaf_ids, analytic, lo, hi, avx2: Avx2::detect() }
@@ -378,7 +407,7 @@ impl Accel {
     fn traverse<const ORDERED: bool, K: NodeTest>(
         &self,
         kernel: K,
-        wide: &WideBvh,
+        wide: &WideTree,
         o: Vec3A,
         d: Vec3A,
         t_max: f32,
@@ -407,7 +436,7 @@ impl Accel {
     fn traverse_with<const ORDERED: bool, K: NodeTest>(
         &self,
         kernel: K,
-        wide: &WideBvh,
+        wide: &WideTree,
         o: Vec3A,
         d: Vec3A,
         mut t_max: f32,
@@ -525,7 +554,7 @@ impl Accel {
             let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
             self.traverse::<true, K>(
                 kernel,
-                bvh,
+                &bvh.closest,
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(t_max),
@@ -537,6 +566,7 @@ impl Accel {
                         Some(lane) => {
                             let t = hits.t[lane];
                             t_max = t;
+                            prefetch(&self.leaf_ids[index as usize]);
                             let (b1, b2) = hits.barycentrics(lane);
                             closest = Some((index, lane, t, b1, b2));
                             shifted(t)
@@ -627,8 +657,7 @@ impl Accel {
         // Barycentric interpolation is more precise than o + t d far from the origin.
         let p = pull_inside(v0 * b0 + v1 * b1 + v2 * b2, [v0, v1, v2]);
         let n = ids.normals[lane];
-        // The vertex indices only for meshes with vertex normals or uvs (a cache miss).
-        let idx = || m.indices[tri.prim as usize].map(|i| i as usize);
+        let idx = || ids.indices[lane].map(|i| i as usize);
         let ns = match &m.normals {
             Some(ns) => {
                 let idx = idx();
@@ -665,7 +694,7 @@ impl Accel {
             let mut blocked = false;
             self.traverse::<false, K>(
                 kernel,
-                bvh,
+                &bvh.all,
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(ray.t_max),
@@ -737,7 +766,7 @@ impl Accel {
         // closed-room leak: obvhs skips boxes the ray leaves before its t = 1e-4).
         self.traverse::<false, K>(
             kernel,
-            bvh,
+            &bvh.all,
             o - d * ORIGIN_BACKOFF,
             d,
             shifted(ray.t_max),
@@ -838,7 +867,9 @@ mod tests {
         let shapes = vec![shape(Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false)))];
         let mut accel = Accel::build(&shapes);
         if deep_stack {
-            accel.bvh.as_mut().unwrap().stack_need = usize::MAX;
+            let bvh = accel.bvh.as_mut().unwrap();
+            bvh.closest.stack_need = usize::MAX;
+            bvh.all.stack_need = usize::MAX;
         }
         let kernels = kernels();
         for _ in 0..2000 {

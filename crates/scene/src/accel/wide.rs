@@ -5,8 +5,11 @@
 //!
 //! obvhs builds the binary tree (PLOC, reinsertion, and its SAH leaf collapse into leaves of up
 //! to [`LEAF_SIZE`] triangles: `obvhs::bvh2::builder::build_bvh2`); [`WideBvh::new`] turns it
-//! into a `WIDTH`-wide tree the way wide BVHs are usually built from binary ones (Wald, Benthin
-//! and Boulos 2008, "Getting Rid of Packets"): a node's children are found by
+//! into two `WIDTH`-wide trees over the same leaves (docs/performance.md, "issue 17, tenth
+//! part"): for closest-hit queries the collapse that minimises the surface area heuristic's cost
+//! ([`CollapsePlan`], Ylitie, Karras and Laine 2017), and for queries that visit every box along
+//! a segment (shadow rays) the greedy one, the way wide BVHs are usually built from binary ones
+//! (Wald, Benthin and Boulos 2008, "Getting Rid of Packets"): a node's children are found by
 //! opening, again and again, the inner child of largest surface area until there are `WIDTH`
 //! children or none left to open. The binary tree's leaves stay leaves, so each holds up to four
 //! triangles, one SSE packet (`WatertightRay::intersect_packet`).
@@ -303,45 +306,144 @@ impl WideNode {
     }
 }
 
-/// The wide tree: nodes (the root first, every node before its children) and leaves, each leaf
-/// a run `(first, count)` of `primitive_indices` with `count <= LEAF_SIZE`.
+/// Traversal cost of a wide node relative to a leaf test, in the surface area heuristic of
+/// [`CollapsePlan`].
+const NODE_COST: f32 = 1.0;
+/// Cost of a leaf's packet test.
+const LEAF_COST: f32 = 0.6;
+
+/// Which binary nodes become the children of each wide node: the collapse that minimises the
+/// surface area heuristic's cost of the wide tree (Ylitie, Karras and Laine 2017, "Efficient
+/// Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs", section 3.1), by dynamic
+/// programming over the binary tree. `cost[n][i - 1]` is the least cost of binary node `n`'s
+/// subtree given `i` child slots of its wide parent: one slot holds `n` as a leaf or as a wide
+/// node of its own (`A(n) NODE_COST` plus its subtree spread over `WIDTH` slots), more slots may
+/// instead spread `n`'s two children over them. The greedy collapse (open the largest inner
+/// child until the node is full) left half of the nodes with two or three children on the peer
+/// spheres (961 nodes for 3137 leaves, where 448 could hold them); this one's closest hits are
+/// 3-5% faster there, but shadow rays through `null` spheres, which visit every box they cross,
+/// were slower in it, so they keep the greedy tree ([`WideBvh`]).
+struct CollapsePlan {
+    cost: Vec<[f32; WIDTH]>,
+    /// `split[n][i - 1]`: slots given to `n`'s first child when `n` spreads over `i` slots,
+    /// 0 when `n` takes one slot itself.
+    split: Vec<[u8; WIDTH]>,
+}
+
+impl CollapsePlan {
+    fn new(b2: &[obvhs::bvh2::node::Bvh2Node]) -> Self {
+        let mut cost = vec![[0.0f32; WIDTH]; b2.len()];
+        let mut split = vec![[0u8; WIDTH]; b2.len()];
+        // Post-order without recursion: children before their parent.
+        let mut order = Vec::with_capacity(b2.len());
+        let mut stack = vec![0usize];
+        while let Some(n) = stack.pop() {
+            order.push(n);
+            if !b2[n].is_leaf() {
+                let f = b2[n].first_index as usize;
+                stack.extend([f, f + 1]);
+            }
+        }
+        for &n in order.iter().rev() {
+            let area = b2[n].aabb.half_area();
+            if b2[n].is_leaf() {
+                cost[n] = [area * LEAF_COST; WIDTH];
+                continue;
+            }
+            let (cl, cr) = (cost[b2[n].first_index as usize], cost[b2[n].first_index as usize + 1]);
+            // Both children spread over `i` slots (`i >= 2`), the best split of the slots.
+            let spread = |i: usize| {
+                (1..i).map(|k| (cl[k - 1] + cr[i - k - 1], k)).min_by(|a, b| a.0.total_cmp(&b.0)).unwrap()
+            };
+            let own = area * NODE_COST + spread(WIDTH).0;
+            cost[n][0] = own;
+            for i in 2..=WIDTH {
+                let (c, k) = spread(i);
+                (cost[n][i - 1], split[n][i - 1]) = if c < own { (c, k as u8) } else { (own, 0) };
+            }
+        }
+        CollapsePlan { cost, split }
+    }
+
+    /// The binary nodes that become the children of the wide node made for binary node `b`
+    /// (inner), appended to `out`.
+    fn children(&self, b2: &[obvhs::bvh2::node::Bvh2Node], b: usize, out: &mut Vec<usize>) {
+        let (l, r) = (b2[b].first_index as usize, b2[b].first_index as usize + 1);
+        let k = (1..WIDTH)
+            .min_by(|&x, &y| {
+                (self.cost[l][x - 1] + self.cost[r][WIDTH - x - 1])
+                    .total_cmp(&(self.cost[l][y - 1] + self.cost[r][WIDTH - y - 1]))
+            })
+            .unwrap();
+        self.spread(b2, l, k, out);
+        self.spread(b2, r, WIDTH - k, out);
+    }
+
+    /// The roots `n`'s subtree is spread into over `i` slots.
+    fn spread(&self, b2: &[obvhs::bvh2::node::Bvh2Node], n: usize, i: usize, out: &mut Vec<usize>) {
+        let k = usize::from(self.split[n][i - 1]);
+        if b2[n].is_leaf() || k == 0 {
+            out.push(n);
+        } else {
+            let f = b2[n].first_index as usize;
+            self.spread(b2, f, k, out);
+            self.spread(b2, f + 1, i - k, out);
+        }
+    }
+}
+
+/// A wide tree over [`WideBvh::leaves`]: nodes (the root first, every node before its
+/// children), laid out depth first with siblings together.
 #[derive(Clone, Debug)]
-pub struct WideBvh {
+pub struct WideTree {
     pub nodes: Vec<WideNode>,
-    pub leaves: Vec<(u32, u32)>,
-    /// The binary tree's order of the primitives: leaf runs index into it.
-    pub primitive_indices: Vec<u32>,
     /// Most entries a traversal's stack can hold at once (each node visited pushes its hit
     /// children and pops one).
     pub stack_need: usize,
 }
 
+/// Two collapses of one binary tree over the same leaves: [`Self::closest`], the collapse that
+/// minimises the surface area heuristic's cost ([`CollapsePlan`]), for closest-hit queries,
+/// and [`Self::all`], the greedy one (open the inner child of largest area until the node is
+/// full), for queries that visit every box along a segment (shadow rays collecting the
+/// surfaces they cross), where the greedy tree measured faster.
+#[derive(Clone, Debug)]
+pub struct WideBvh {
+    pub closest: WideTree,
+    pub all: WideTree,
+    /// Each leaf a run `(first, count)` of `primitive_indices` with `count <= LEAF_SIZE`, in
+    /// the binary tree's depth-first order.
+    pub leaves: Vec<(u32, u32)>,
+    /// The binary tree's order of the primitives: leaf runs index into it.
+    pub primitive_indices: Vec<u32>,
+}
+
 impl WideBvh {
-    /// Collapses `bvh` (leaves of at most [`LEAF_SIZE`] primitives) into a [`WIDTH`]-wide tree,
-    /// nodes laid out depth first with siblings together.
+    /// Collapses `bvh` (leaves of at most [`LEAF_SIZE`] primitives) into both [`WIDTH`]-wide
+    /// trees.
     pub fn new(bvh: Bvh2) -> Self {
         let b2 = &bvh.nodes;
-        let mut nodes: Vec<WideNode> = Vec::new();
+        // Leaf numbers in the binary tree's depth-first order, shared by both trees.
+        let mut leaf_of = vec![u32::MAX; b2.len()];
         let mut leaves: Vec<(u32, u32)> = Vec::new();
-        let mut leaf = |n: &obvhs::bvh2::node::Bvh2Node| {
-            assert!(n.prim_count <= LEAF_SIZE, "obvhs made a leaf of {} primitives", n.prim_count);
-            leaves.push((n.first_index, n.prim_count));
-            LEAF | (leaves.len() as u32 - 1)
-        };
-        if b2.is_empty() {
-            return WideBvh { nodes, leaves, primitive_indices: bvh.primitive_indices, stack_need: 1 };
+        let mut stack = if b2.is_empty() { vec![] } else { vec![0usize] };
+        while let Some(n) = stack.pop() {
+            if b2[n].is_leaf() {
+                assert!(
+                    b2[n].prim_count <= LEAF_SIZE,
+                    "obvhs made a leaf of {} primitives",
+                    b2[n].prim_count
+                );
+                leaf_of[n] = LEAF | leaves.len() as u32;
+                leaves.push((b2[n].first_index, b2[n].prim_count));
+            } else {
+                let f = b2[n].first_index as usize;
+                stack.extend([f + 1, f]);
+            }
         }
-        if b2[0].is_leaf() {
-            let only = leaf(&b2[0]);
-            nodes.push(WideNode::new(&[(b2[0].aabb, only)]));
-            return WideBvh { nodes, leaves, primitive_indices: bvh.primitive_indices, stack_need: 2 };
-        }
-        // (binary node, wide node to fill); every wide node is reserved when its parent is made.
-        nodes.push(WideNode::new(&[]));
-        let mut work = vec![(0usize, 0usize)];
-        let mut open: Vec<usize> = Vec::with_capacity(WIDTH);
-        while let Some((b, w)) = work.pop() {
-            open.clear();
+        let plan = CollapsePlan::new(b2);
+        let closest = collapse(b2, &leaf_of, |b, open| plan.children(b2, b, open));
+        let all = collapse(b2, &leaf_of, |b, open| {
             let first = b2[b].first_index as usize;
             open.extend([first, first + 1]);
             // Open the largest inner child until the node is full.
@@ -354,35 +456,61 @@ impl WideBvh {
                 open[i] = f;
                 open.push(f + 1);
             }
-            let mut children = [(Aabb::empty(), 0u32); WIDTH];
-            for (slot, &c) in children.iter_mut().zip(&open) {
-                let what = if b2[c].is_leaf() {
-                    leaf(&b2[c])
-                } else {
-                    nodes.push(WideNode::new(&[]));
-                    work.push((c, nodes.len() - 1));
-                    (nodes.len() - 1) as u32
-                };
-                *slot = (b2[c].aabb, what);
-            }
-            nodes[w] = WideNode::new(&children[..open.len()]);
-        }
-        // need(node) = (children - 1) + max over inner children of need(child), over the nodes
-        // in reverse order (children come after their parent).
-        let mut need = vec![0usize; nodes.len()];
-        for i in (0..nodes.len()).rev() {
-            let n = &nodes[i];
-            let slots = (0..WIDTH).filter(|&c| n.planes[0].lane(c) != f32::INFINITY);
-            let deepest = slots
-                .clone()
-                .filter(|&c| n.children[c] & LEAF == 0)
-                .map(|c| need[n.children[c] as usize])
-                .max()
-                .unwrap_or(0);
-            need[i] = slots.count().saturating_sub(1) + deepest;
-        }
-        WideBvh { stack_need: need[0] + 1, nodes, leaves, primitive_indices: bvh.primitive_indices }
+        });
+        WideBvh { closest, all, leaves, primitive_indices: bvh.primitive_indices }
     }
+}
+
+/// The wide tree whose node for binary node `b` (inner) has the children `children(b, out)`
+/// appends to `out` (at most [`WIDTH`] binary nodes).
+fn collapse(
+    b2: &[obvhs::bvh2::node::Bvh2Node],
+    leaf_of: &[u32],
+    mut children: impl FnMut(usize, &mut Vec<usize>),
+) -> WideTree {
+    let mut nodes: Vec<WideNode> = Vec::new();
+    if b2.is_empty() {
+        return WideTree { nodes, stack_need: 1 };
+    }
+    if b2[0].is_leaf() {
+        nodes.push(WideNode::new(&[(b2[0].aabb, leaf_of[0])]));
+        return WideTree { nodes, stack_need: 2 };
+    }
+    // (binary node, wide node to fill); every wide node is reserved when its parent is made.
+    nodes.push(WideNode::new(&[]));
+    let mut work = vec![(0usize, 0usize)];
+    let mut open: Vec<usize> = Vec::with_capacity(WIDTH);
+    while let Some((b, w)) = work.pop() {
+        open.clear();
+        children(b, &mut open);
+        let mut slots = [(Aabb::empty(), 0u32); WIDTH];
+        for (slot, &c) in slots.iter_mut().zip(&open) {
+            let what = if b2[c].is_leaf() {
+                leaf_of[c]
+            } else {
+                nodes.push(WideNode::new(&[]));
+                work.push((c, nodes.len() - 1));
+                (nodes.len() - 1) as u32
+            };
+            *slot = (b2[c].aabb, what);
+        }
+        nodes[w] = WideNode::new(&slots[..open.len()]);
+    }
+    // need(node) = (children - 1) + max over inner children of need(child), over the nodes
+    // in reverse order (children come after their parent).
+    let mut need = vec![0usize; nodes.len()];
+    for i in (0..nodes.len()).rev() {
+        let n = &nodes[i];
+        let slots = (0..WIDTH).filter(|&c| n.planes[0].lane(c) != f32::INFINITY);
+        let deepest = slots
+            .clone()
+            .filter(|&c| n.children[c] & LEAF == 0)
+            .map(|c| need[n.children[c] as usize])
+            .max()
+            .unwrap_or(0);
+        need[i] = slots.count().saturating_sub(1) + deepest;
+    }
+    WideTree { stack_need: need[0] + 1, nodes }
 }
 
 #[cfg(test)]
@@ -474,35 +602,37 @@ mod tests {
             params.pre_split = false;
             params.max_prims_per_leaf = LEAF_SIZE;
             let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()));
-            let mut seen = vec![0u32; count];
-            // (node or leaf, box of its parent's slot)
-            let mut work = vec![(0u32, Aabb::LARGEST)];
-            while let Some((x, outer)) = work.pop() {
-                let inside = |b: &Aabb| b.min.cmpge(outer.min).all() && b.max.cmple(outer.max).all();
-                if x & LEAF != 0 {
-                    let (first, n) = wide.leaves[(x & !LEAF) as usize];
-                    assert!((1..=LEAF_SIZE).contains(&n), "{n}");
-                    for &i in &wide.primitive_indices[first as usize..(first + n) as usize] {
-                        seen[i as usize] += 1;
-                        assert!(inside(&boxes[i as usize]));
-                    }
-                    continue;
-                }
-                let node = &wide.nodes[x as usize];
-                for c in 0..WIDTH {
-                    let lane = |pl: usize| node.planes[pl].lane(c);
-                    if lane(0) == f32::INFINITY {
+            for tree in [&wide.closest, &wide.all] {
+                let mut seen = vec![0u32; count];
+                // (node or leaf, box of its parent's slot)
+                let mut work = vec![(0u32, Aabb::LARGEST)];
+                while let Some((x, outer)) = work.pop() {
+                    let inside = |b: &Aabb| b.min.cmpge(outer.min).all() && b.max.cmple(outer.max).all();
+                    if x & LEAF != 0 {
+                        let (first, n) = wide.leaves[(x & !LEAF) as usize];
+                        assert!((1..=LEAF_SIZE).contains(&n), "{n}");
+                        for &i in &wide.primitive_indices[first as usize..(first + n) as usize] {
+                            seen[i as usize] += 1;
+                            assert!(inside(&boxes[i as usize]));
+                        }
                         continue;
                     }
-                    let b = Aabb::new(
-                        Vec3A::new(lane(0), lane(2), lane(4)),
-                        Vec3A::new(lane(1), lane(3), lane(5)),
-                    );
-                    assert!(inside(&b));
-                    work.push((node.children[c], b));
+                    let node = &tree.nodes[x as usize];
+                    for c in 0..WIDTH {
+                        let lane = |pl: usize| node.planes[pl].lane(c);
+                        if lane(0) == f32::INFINITY {
+                            continue;
+                        }
+                        let b = Aabb::new(
+                            Vec3A::new(lane(0), lane(2), lane(4)),
+                            Vec3A::new(lane(1), lane(3), lane(5)),
+                        );
+                        assert!(inside(&b));
+                        work.push((node.children[c], b));
+                    }
                 }
+                assert!(seen.iter().all(|&n| n == 1), "{count}: {seen:?}");
             }
-            assert!(seen.iter().all(|&n| n == 1), "{count}: {seen:?}");
         }
     }
 }
