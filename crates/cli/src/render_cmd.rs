@@ -272,7 +272,7 @@ fn report_and_write(
     let secs = out.elapsed.as_secs_f64();
     let samples = out.film.samples * (w * h) as u64;
     eprintln!(
-        "{name}: {}x{} at {} spp in {:.2} s ({} passes, {:.2} Msamples/s){}",
+        "{name}: {}x{} at {} spp in {:.3} s ({} passes, {:.2} Msamples/s){}",
         w,
         h,
         out.film.samples,
