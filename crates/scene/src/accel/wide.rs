@@ -585,6 +585,22 @@ mod tests {
         assert!(hit_lanes > 5_000 && missed > 5_000 && touching > 100, "{hit_lanes} {missed} {touching}");
     }
 
+    /// `count` random boxes in a cube of side 10 and both collapses of obvhs's tree over them.
+    fn random_tree(s: &mut Sampler, count: usize) -> (Vec<Aabb>, WideBvh) {
+        let mut p = || Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let boxes: Vec<Aabb> = (0..count)
+            .map(|_| {
+                let c = p() * 10.0;
+                Aabb::new(c, c + p() * 0.5)
+            })
+            .collect();
+        let mut params = BvhBuildParams::slow_build();
+        params.pre_split = false;
+        params.max_prims_per_leaf = LEAF_SIZE;
+        let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()));
+        (boxes, wide)
+    }
+
     /// The surface area heuristic's cost that [`CollapsePlan`] minimises, of a whole tree:
     /// `NODE_COST` times the area of every node (the union of its child boxes) plus `LEAF_COST`
     /// times the area of every leaf's box.
@@ -616,18 +632,8 @@ mod tests {
     #[test]
     fn sah_collapse_costs_no_more_than_the_greedy_one() {
         let mut s = Sampler::from_seed(5);
-        let p = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
         for count in [2usize, 9, 40, 500, 3000] {
-            let boxes: Vec<Aabb> = (0..count)
-                .map(|_| {
-                    let c = p(&mut s);
-                    Aabb::new(c, c + Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.5)
-                })
-                .collect();
-            let mut params = BvhBuildParams::slow_build();
-            params.pre_split = false;
-            params.max_prims_per_leaf = LEAF_SIZE;
-            let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()));
+            let (_, wide) = random_tree(&mut s, count);
             let (sah, greedy) = (sah_cost(&wide.closest), sah_cost(&wide.all));
             assert!(sah <= greedy * (1.0 + 1e-5), "{count} boxes: {sah} > {greedy}");
             if count >= 500 {
@@ -642,18 +648,8 @@ mod tests {
     #[test]
     fn collapse_keeps_every_primitive_once_inside_its_boxes() {
         let mut s = Sampler::from_seed(11);
-        let p = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
         for count in [1usize, 3, 5, 9, 40, 3000] {
-            let boxes: Vec<Aabb> = (0..count)
-                .map(|_| {
-                    let c = p(&mut s);
-                    Aabb::new(c, c + Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.5)
-                })
-                .collect();
-            let mut params = BvhBuildParams::slow_build();
-            params.pre_split = false;
-            params.max_prims_per_leaf = LEAF_SIZE;
-            let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()));
+            let (boxes, wide) = random_tree(&mut s, count);
             for tree in [&wide.closest, &wide.all] {
                 let mut seen = vec![0u32; count];
                 // (node or leaf, box of its parent's slot)
