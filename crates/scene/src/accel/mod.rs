@@ -3,13 +3,13 @@
 //! a watertight triangle test; analytic spheres and disks tested directly (scenes have few of
 //! them).
 //!
-//! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide trees traversal reads
-//! and the traversal are ours (docs/performance.md, "Traversal of the peer scenes", "Front-to-back
-//! traversal and per-query costs" and "issue 17, fourth part"): [`wide`] collapses the binary
-//! tree twice over the same leaves (one collapse for closest hits, one for shadow rays: "issue
-//! 17, tenth part") into nodes of 8 f32 child boxes tested at once (in one AVX2 vector per plane where the
-//! CPU has AVX2, detected when the `Accel` is built, else in two SSE vectors: "issue 17, fifth
-//! part"), the loop
+//! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide trees the traversal
+//! reads and the traversal are ours (docs/performance.md, "Traversal of the peer scenes",
+//! "Front-to-back traversal and per-query costs" and "issue 17, fourth part"): [`wide`]
+//! collapses the binary tree twice over the same leaves (one collapse for closest hits, one for
+//! shadow rays: "issue 17, tenth part") into nodes of 8 f32 child boxes tested at once (in one
+//! AVX2 vector per plane where the CPU has AVX2, detected when the `Accel` is built, else in two
+//! SSE vectors: "issue 17, fifth part"), the loop
 //! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
 //! entry distance, and each leaf's 1-4 triangles are tested at once in SSE lanes
 //! ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
@@ -233,6 +233,9 @@ struct LeafIds {
     /// that the interaction's loads of those do not wait for a load of the mesh's index array.
     indices: [[u32; 3]; 4],
 }
+
+// `prefetch` fetches exactly two lines.
+const _: () = assert!(std::mem::size_of::<LeafIds>() == 128);
 
 /// `$body` with `$k` bound to the query's node-test kernel. The kernel is chosen once per query,
 /// not per node: with AVX2 the whole query, its traversal loop and leaf tests included, runs
