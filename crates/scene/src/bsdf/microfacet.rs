@@ -146,13 +146,13 @@ impl Microfacet {
                     let phi = 2.0 * PI * u.y;
                     return Vec2::new(r * phi.cos(), r * phi.sin());
                 }
-                // The slope x by inverting its marginal CDF (Heitz and d'Eon 2014, Jakob's
-                // safeguarded Newton steps), then a Gaussian in y. In f32 with Mitsuba 3's
+                // The slope x by inverting its marginal CDF (Heitz and d'Eon 2014) with
+                // safeguarded Newton steps, then a Gaussian in y. In f32 with Mitsuba 3's
                 // stopping rule (|CDF error| < 1e-5, at most 9 steps): f64 and 1e-7 cost twice
                 // the time for slopes no f32 direction resolves.
                 let cdf = BeckmannSlopeCdf::new(cos_theta_i);
                 let x = u.x.clamp(1e-6, 1.0 - 1e-7);
-                let (_, slope) = cdf.solve(x, beckmann_table().guess(cos_theta_i, x), 1e-5, 9);
+                let slope = cdf.solve(x, beckmann_table().guess(cos_theta_i, x), 1e-5, 9);
                 let y = (2.0 * u.y - 1.0).clamp(-1.0 + 1e-7, 1.0 - 1e-7);
                 Vec2::new(slope, erfinv(y))
             }
@@ -173,139 +173,179 @@ impl Microfacet {
 }
 
 /// The marginal CDF of the slope `x` of the visible normals of the unit-roughness Beckmann
-/// distribution seen from an angle `theta_i`, in the variable `b = erf(x)` (Heitz and d'Eon
-/// 2014, section 4; Jakob's variant in Mitsuba): `C(b) = norm (1 + b + tan(theta_i) / sqrt(pi)
-/// exp(-erfinv(b)^2))` on `b` in `[-1, erf(cot(theta_i))]`.
+/// distribution seen from an angle `theta_i` (Heitz and d'Eon 2014, section 4): the density is
+/// proportional to `(1 - x tan(theta_i)) exp(-x^2)` on `x <= cot(theta_i)`, so
+/// `C(x) = norm (1 + erf(x) + tan(theta_i) / sqrt(pi) exp(-x^2))`, `C(cot(theta_i)) = 1`.
+///
+/// Solved for `x` directly, with `1 + erf(x)` and `exp(-x^2)` from one exponential
+/// ([`erfc_exp`]). Jakob's variant (Mitsuba 3) solves in `b = erf(x)`, which costs an `erfinv`
+/// (a logarithm and a polynomial of degree 8) per evaluation and one more for the slope: a
+/// visible Beckmann normal then cost 150-180 ns, as much as a closest-hit query, and 130-150 ns
+/// in `x` (docs/performance.md, "issue 17, eleventh part").
 struct BeckmannSlopeCdf {
     tan_theta_i: f32,
-    /// `erf(cot(theta_i))`: the largest `b`, the slope seen edge-on.
-    c: f32,
+    /// The largest slope, `cot(theta_i)`, capped at [`X_LIMIT`].
+    x_max: f32,
     norm: f32,
 }
+
+/// Slopes are sought in `[-X_LIMIT, X_LIMIT]`: beyond, the CDF is within 1e-15 of 0 or 1
+/// (`erfc(6) = 2e-17`), far below the stopping tolerance, and no `u` reaches there.
+const X_LIMIT: f32 = 6.0;
 
 impl BeckmannSlopeCdf {
     fn new(cos_theta_i: f32) -> Self {
         let ci = cos_theta_i;
         let sin_theta_i = (1.0 - ci * ci).max(0.0).sqrt();
         let tan_theta_i = sin_theta_i / ci;
-        let cot_theta_i = 1.0 / tan_theta_i;
-        let c = erf(cot_theta_i);
-        let norm = 1.0 / (1.0 + c + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
-        BeckmannSlopeCdf { tan_theta_i, c, norm }
+        let cot_theta_i = ci / sin_theta_i;
+        // C(cot) = norm (2 - erfc(cot) + tan / sqrt(pi) exp(-cot^2)) = 1.
+        let (erfc, e) = erfc_exp(cot_theta_i);
+        let norm = 1.0 / (2.0 - erfc + INV_SQRT_PI * tan_theta_i * e);
+        BeckmannSlopeCdf { tan_theta_i, x_max: cot_theta_i.min(X_LIMIT), norm }
     }
 
-    /// `C(b)`, given `inv = erfinv(b)`.
+    /// `C(x)` and the density `C'(x) = norm 2 / sqrt(pi) exp(-x^2) (1 - x tan(theta_i))`.
     #[inline]
-    fn cdf(&self, b: f32, inv: f32) -> f32 {
-        self.norm * (1.0 + b + INV_SQRT_PI * self.tan_theta_i * (-inv * inv).exp())
+    fn eval(&self, x: f32) -> (f32, f32) {
+        let (erfc, e) = erfc_exp(x);
+        // 1 + erf(x) without cancellation for x < 0, where it is erfc(-x).
+        let one_plus_erf = if x < 0.0 { erfc } else { 2.0 - erfc };
+        let c = self.norm * (one_plus_erf + INV_SQRT_PI * self.tan_theta_i * e);
+        let density = self.norm * std::f32::consts::FRAC_2_SQRT_PI * e * (1.0 - x * self.tan_theta_i);
+        (c, density)
     }
 
-    /// `b` and the slope `x = erfinv(b)` with `C(b) = u` to within `tol`: Newton steps on `b`
-    /// from `b`, safeguarded by bisection (a step leaving the bracket is replaced by its
-    /// midpoint), at most `steps` evaluations (Mitsuba 3's `sample_visible_11` stops at 1e-5
-    /// or after its steps).
+    /// The slope `x` with `C(x) = u` to within `tol`: Newton steps from `x`, safeguarded by
+    /// bisection (a step leaving the bracket is replaced by its midpoint), at most `steps`
+    /// evaluations (Mitsuba 3's `sample_visible_11` stops at 1e-5 or after its steps).
     #[inline]
-    fn solve(&self, u: f32, mut b: f32, tol: f32, steps: u32) -> (f32, f32) {
-        // The bracket stops one f32 short of -1 and 1, where `erfinv` is infinite.
-        let (mut a, mut c) = (-B_MAX, self.c.min(B_MAX));
+    fn solve(&self, u: f32, mut x: f32, tol: f32, steps: u32) -> f32 {
+        let (mut lo, mut hi) = (-X_LIMIT, self.x_max);
         for _ in 0..steps {
-            if !(b >= a && b <= c) {
-                b = 0.5 * (a + c);
+            if !(x >= lo && x <= hi) {
+                x = 0.5 * (lo + hi);
             }
-            let inv = erfinv(b);
-            let value = self.cdf(b, inv) - u;
+            let (c, density) = self.eval(x);
+            let value = c - u;
             if value.abs() < tol {
-                return (b, inv);
+                return x;
             }
             if value > 0.0 {
-                c = b;
+                hi = x;
             } else {
-                a = b;
+                lo = x;
             }
-            b -= value / (self.norm * (1.0 - inv * self.tan_theta_i));
+            x -= value / density;
         }
-        let b = b.clamp(a, c);
-        (b, erfinv(b))
+        x.clamp(lo, hi)
     }
 }
 
-/// The largest f32 below 1.
-const B_MAX: f32 = 1.0 - f32::EPSILON / 2.0;
-
 const INV_SQRT_PI: f32 = std::f32::consts::FRAC_2_SQRT_PI * 0.5;
 
-/// The solution `b` of [`BeckmannSlopeCdf`] tabulated over `w = sqrt(1 - cos(theta_i))` and
-/// `v = sqrt(1 - u)`, the starting point of its Newton steps (built once, 33 KB). In these
-/// variables `b` is smooth at both ends: it goes as `1 - 2 v^2` at normal incidence, and linearly
-/// in `v` where the slope approaches the edge-on one, whose density vanishes linearly. From the
-/// bilinear interpolation the roughdielectric_spot peer's samples need 1.4 evaluations of the
-/// CDF (an `erfinv` and an `exp` each) instead of 2.4 from Jakob's fitted start, which also cost
-/// an `acos` and a `powf`: 5% of that render (docs/performance.md, "issue 17, eighth part"). A
-/// table 4 times finer (132 KB) needed 1.04 evaluations in isolation and was no faster there.
+/// The solution `x` of [`BeckmannSlopeCdf`] tabulated over `w = sqrt(1 - cos(theta_i))` and
+/// `v = sqrt(1 - u)`, the starting point of its Newton steps (built once, 38 KB). In `v` the
+/// slope is smooth where it approaches the edge-on one, whose density vanishes linearly; at the
+/// other end, below [`U_TAIL`], it goes as `-sqrt(-ln u)`, and a second table over
+/// `q = sqrt(-ln u)` takes over (the eighth part of docs/performance.md's issue 17 tabulated
+/// `b = erf(x)`, smooth at both ends in `v`, but each Newton step in `b` costs an `erfinv`). A
+/// table 4 times finer (132 KB) needed fewer evaluations in isolation and was no faster there.
 struct BeckmannTable {
-    b: Box<[f32]>,
+    /// Over `v` in `[0, 1]`, [`TABLE_V`] columns; its last cell is never read.
+    main: Box<[f32]>,
+    /// Over `q = sqrt(-ln u)` from `u = U_TAIL` to `1e-6`, [`TAIL_Q`] columns.
+    tail: Box<[f32]>,
 }
 
 const TABLE_W: usize = 65;
 const TABLE_V: usize = 129;
+const TAIL_Q: usize = 17;
+
+/// Below this `u` (the last cell of [`TABLE_V`], `v > 127/128`) the tail table is read: there
+/// `x` goes as `-sqrt(-ln u)`, linear in `q`.
+const U_TAIL: f32 = 1.0 - (127.0 / 128.0) * (127.0 / 128.0);
 
 fn beckmann_table() -> &'static BeckmannTable {
     static TABLE: std::sync::OnceLock<BeckmannTable> = std::sync::OnceLock::new();
     TABLE.get_or_init(BeckmannTable::new)
 }
 
+/// The `q` range of the tail table.
+fn tail_range() -> (f32, f32) {
+    ((-U_TAIL.ln()).sqrt(), (-(1e-6f32).ln()).sqrt())
+}
+
 impl BeckmannTable {
     fn new() -> Self {
-        let mut b = vec![0.0f32; TABLE_W * TABLE_V];
+        let solve = |ci: f32, u: f32| {
+            let u = u.clamp(1e-6, 1.0 - 1e-7);
+            if ci > 0.99999 {
+                erfinv(2.0 * u - 1.0)
+            } else {
+                BeckmannSlopeCdf::new(ci).solve(u, 0.0, 1e-7, 64)
+            }
+        };
+        let (q0, q1) = tail_range();
+        let (mut main, mut tail) = (Vec::new(), Vec::new());
         for i in 0..TABLE_W {
             let w = i as f32 / (TABLE_W - 1) as f32;
             let ci = (1.0 - w * w).max(1e-4);
             for j in 0..TABLE_V {
                 let v = j as f32 / (TABLE_V - 1) as f32;
-                let u = (1.0 - v * v).clamp(1e-6, 1.0 - 1e-7);
-                b[i * TABLE_V + j] = if ci > 0.99999 {
-                    2.0 * u - 1.0
-                } else {
-                    let cdf = BeckmannSlopeCdf::new(ci);
-                    cdf.solve(u, 0.0, 1e-7, 64).0
-                };
+                main.push(solve(ci, 1.0 - v * v));
+            }
+            for j in 0..TAIL_Q {
+                let q = q0 + (q1 - q0) * j as f32 / (TAIL_Q - 1) as f32;
+                tail.push(solve(ci, (-q * q).exp()));
             }
         }
-        BeckmannTable { b: b.into_boxed_slice() }
+        BeckmannTable { main: main.into_boxed_slice(), tail: tail.into_boxed_slice() }
     }
 
     #[inline]
     fn guess(&self, cos_theta_i: f32, u: f32) -> f32 {
         let w = (1.0 - cos_theta_i).max(0.0).sqrt() * (TABLE_W - 1) as f32;
-        let v = (1.0 - u).max(0.0).sqrt() * (TABLE_V - 1) as f32;
         let i = (w as usize).min(TABLE_W - 2);
-        let j = (v as usize).min(TABLE_V - 2);
-        let (fw, fv) = (w - i as f32, v - j as f32);
-        let row = |i: usize| {
-            let r = &self.b[i * TABLE_V + j..i * TABLE_V + j + 2];
-            r[0] + (r[1] - r[0]) * fv
+        let fw = w - i as f32;
+        let (table, cols, c) = if u >= U_TAIL {
+            (&self.main, TABLE_V, (1.0 - u).max(0.0).sqrt() * (TABLE_V - 1) as f32)
+        } else {
+            let (q0, q1) = tail_range();
+            let q = ((-u.ln()).sqrt() - q0) / (q1 - q0) * (TAIL_Q - 1) as f32;
+            (&self.tail, TAIL_Q, q.max(0.0))
         };
-        let (b0, b1) = (row(i), row(i + 1));
-        b0 + (b1 - b0) * fw
+        let j = (c as usize).min(cols - 2);
+        let fc = c - j as f32;
+        let row = |i: usize| {
+            let r = &table[i * cols + j..i * cols + j + 2];
+            r[0] + (r[1] - r[0]) * fc
+        };
+        let (x0, x1) = (row(i), row(i + 1));
+        x0 + (x1 - x0) * fw
     }
 }
 
-/// Error function, as `1 - erfc` with the Chebyshev fit of `erfc` from Numerical Recipes
-/// (`erfcc`: relative error of `erfc` below 1.2e-7 everywhere), evaluated in f32 like Mitsuba's
-/// `erf` (absolute error ~1e-7, which is the resolution of the f32 CDF values it is used for).
+/// `erfc(|x|)` and `exp(-x^2)`, from one exponential: Abramowitz and Stegun's 7.1.26,
+/// `erfc(z) = t (a1 + t (a2 + t (a3 + t (a4 + t a5)))) exp(-z^2)`, `t = 1 / (1 + p z)`, absolute
+/// error below 1.5e-7 for `z >= 0`, about the resolution of the f32 CDF values it is used for.
 // The published coefficients, as printed; the compiler rounds them to f32.
 #[allow(clippy::excessive_precision)]
-pub(crate) fn erf(x: f32) -> f32 {
+#[inline]
+pub(crate) fn erfc_exp(x: f32) -> (f32, f32) {
     let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let mut p = 0.17087277;
-    for c in
-        [-0.82215223, 1.48851587, -1.13520398, 0.27886807, -0.18628806, 0.09678418, 0.37409196, 1.00002368]
-    {
-        p = c + t * p;
-    }
-    let erfc = t * (-z * z - 1.26551223 + t * p).exp();
-    (1.0 - erfc).copysign(x)
+    let t = 1.0 / (1.0 + 0.327_591_1 * z);
+    let e = (-z * z).exp();
+    let p = t
+        * (0.254_829_592
+            + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    (p * e, e)
+}
+
+/// Error function, `1 - erfc` from [`erfc_exp`].
+#[cfg(test)]
+fn erf(x: f32) -> f32 {
+    (1.0 - erfc_exp(x).0).copysign(x)
 }
 
 /// Inverse error function on (-1, 1): Giles' (2010) single-precision approximation (relative
@@ -389,9 +429,9 @@ mod tests {
     }
 
     /// The Newton steps from the tabulated start reach Mitsuba's tolerance (|CDF error| < 1e-5)
-    /// from grazing to normal incidence and at both ends of the CDF, with a finite slope: a step
-    /// that rounded to `b = -1` gave an infinite slope (a NaN normal) before the bracket stopped
-    /// short of it. The table itself is checked against the solution it starts from.
+    /// from grazing to normal incidence and at both ends of the CDF, with a finite slope inside
+    /// the bracket. The table itself is checked against the solution it starts from (in
+    /// probability: the CDF at the tabulated slope).
     #[test]
     fn beckmann_slope_inversion_converges_everywhere() {
         let table = beckmann_table();
@@ -399,20 +439,29 @@ mod tests {
         let mut n = 0;
         for &ci in &[1e-4f32, 1e-3, 0.01, 0.05, 0.2, 0.4, 0.6, 0.8, 0.95, 0.999, 0.99998] {
             let cdf = BeckmannSlopeCdf::new(ci);
+            // The CDF is normalised: 1 at the edge-on slope (or the bracket's end).
+            assert!(
+                (cdf.eval(cdf.x_max).0 - 1.0).abs() < 1e-6,
+                "cos {ci}: C(x_max) = {}",
+                cdf.eval(cdf.x_max).0
+            );
+            assert!(cdf.eval(-X_LIMIT).0 < 1e-9, "cos {ci}");
             for k in 0..=400 {
                 let u = (k as f32 / 400.0).clamp(1e-6, 1.0 - 1e-7);
                 for u in [u, 7e-5, 1e-4, 1.0 - 1e-5] {
                     let guess = table.guess(ci, u);
-                    let (b, slope) = cdf.solve(u, guess, 1e-5, 9);
-                    assert!(slope.is_finite() && b > -1.0 && b < 1.0, "cos {ci} u {u}: b {b} slope {slope}");
-                    let err = (cdf.cdf(b, slope) - u).abs();
+                    let x = cdf.solve(u, guess, 1e-5, 9);
+                    assert!(
+                        x.is_finite() && (-X_LIMIT..=cdf.x_max).contains(&x),
+                        "cos {ci} u {u}: slope {x}"
+                    );
+                    let err = (cdf.eval(x).0 - u).abs();
                     assert!(err < 1e-5, "cos {ci} u {u}: CDF error {err}");
-                    // A tight solve from the midpoint agrees with the tabulated start.
-                    let (exact, _) = cdf.solve(u, 0.0, 1e-7, 64);
-                    assert!((guess - exact).abs() < 2e-3, "cos {ci} u {u}: table {guess}, solution {exact}");
+                    let off = (cdf.eval(guess).0 - u).abs();
+                    assert!(off < 3e-3, "cos {ci} u {u}: the table's slope {guess} is {off} off");
                     // Steps needed from the table: one evaluation for most samples.
                     let mut steps = 1;
-                    while cdf.solve(u, guess, 1e-5, steps).0 != b {
+                    while cdf.solve(u, guess, 1e-5, steps) != x {
                         steps += 1;
                     }
                     slow += usize::from(steps > 2);
