@@ -180,8 +180,9 @@ impl Microfacet {
 /// Solved for `x` directly, with `1 + erf(x)` and `exp(-x^2)` from one exponential
 /// ([`erfc_exp`]). Jakob's variant (Mitsuba 3) solves in `b = erf(x)`, which costs an `erfinv`
 /// (a logarithm and a polynomial of degree 8) per evaluation and one more for the slope: a
-/// visible Beckmann normal then cost 150-180 ns, as much as a closest-hit query, and 130-150 ns
-/// in `x` (docs/performance.md, "issue 17, eleventh part").
+/// visible Beckmann normal then cost 150-180 ns, as much as a closest-hit query; in `x` it costs
+/// 130-150 ns, and 125-130 ns with the last Newton step unevaluated ([`Self::solve`];
+/// docs/performance.md, "issue 17, eleventh part").
 struct BeckmannSlopeCdf {
     tan_theta_i: f32,
     /// The largest slope, `cot(theta_i)`, capped at [`X_LIMIT`].
