@@ -832,8 +832,10 @@ mod tests {
         [None].into_iter().chain(Avx2::detect().map(Some)).collect()
     }
 
-    /// What a ray's queries return, to compare the kernels bit for bit: the closest hit's `t`,
-    /// primitive and point, and the shadow query's answer with its hits' `t`.
+    /// What a ray's queries return, to compare the kernels' answers bit for bit: the closest
+    /// hit's `t`, primitive and point, and the shadow query's answer with its hits' `t`. The
+    /// node tests may differ in the last bits at a box's boundary (`wide::NodeTest`), but both
+    /// are conservative and the triangle tests are shared, so the answers must not.
     fn answers(accel: &Accel, shapes: &[Shape], ray: &Ray) -> String {
         let h =
             accel.intersect(shapes, ray).map(|h| (h.t.to_bits(), h.prim, h.p.to_array().map(f32::to_bits)));
@@ -894,7 +896,8 @@ mod tests {
                 if brute.is_finite() {
                     assert!(accel.occluded(&Ray { t_max: brute * 1.001 + 1e-5, ..ray }));
                 }
-                // Both kernels bit for bit alike, here and on a segment ending near the hit.
+                // Both kernels' answers bit for bit alike, here and on a segment ending near the
+                // hit.
                 let a = (
                     answers(&accel, &shapes, &ray),
                     answers(&accel, &shapes, &Ray { t_max: brute * 0.999, ..ray }),
@@ -976,7 +979,8 @@ mod tests {
     /// rays starting on a triangle (hits at `t` near 0), rays grazing a tessellated plane (in
     /// its plane, or a hair above or below it), and axis-aligned rays whose zero components
     /// are `-0.0` (their inverse is `-1 / f32::EPSILON`: the near plane must follow its sign).
-    /// With both node tests where the CPU has AVX2, which must agree bit for bit.
+    /// With both node tests where the CPU has AVX2 and FMA, whose answers must agree bit for
+    /// bit.
     #[test]
     fn wide_tree_matches_brute_force_on_surfaces_and_grazing_rays() {
         let mut s = Sampler::from_seed(5);

@@ -68,9 +68,13 @@ pub struct WideNode {
 }
 
 /// A node test: the slab test of all [`WIDTH`] children of a node (Kay and Kajiya 1986) for `t`
-/// in `[t_min, t_max]`. Both kernels ([`Sse`], [`Avx2`]) do the same f32 operations per lane in
-/// the same order (`(plane - o) * inv`, then `max`/`min` with the same operand order, then
-/// `<=`; no fused multiply-add), so their masks and entry distances are bit for bit the same.
+/// in `[t_min, t_max]`. Each plane's distance is `(plane - o) * inv` in [`Sse`] and the fused
+/// `plane * inv - o * inv` in [`Avx2`] (Embree's form; one rounding of the product-difference,
+/// one of `o * inv` per ray): both within a few ulps of `max(|plane|, |o|) |inv|` of the exact
+/// value, far inside the boxes' padding (`BOX_PAD` in `mod.rs`), so both are conservative, but
+/// their masks and entry distances may differ in the last bits at a box's boundary. A flat box
+/// (`min == max` on an axis) gets the same distance for both planes of that axis in either form,
+/// and the test is `entry <= exit`, so a ray through it is never lost.
 pub trait NodeTest: Copy {
     /// The ray splatted to the kernel's lanes.
     type Ray;
@@ -179,70 +183,82 @@ impl NodeTest for Avx2 {
 }
 
 /// The 8-lane node test (docs/performance.md, "issue 17, fifth part"): one 256-bit vector per
-/// plane, chosen at run time, while the default build stays portable (no `target-cpu`).
+/// plane and fused multiply-adds ("twelfth part"), chosen at run time, while the default build
+/// stays portable (no `target-cpu`).
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::{near_planes, NodeTest, WideNode, WIDTH};
     use glam::Vec3A;
     use std::arch::x86_64::*;
 
-    /// Proof that the CPU has AVX2: a value exists only after [`Avx2::detect`] found it, which
-    /// is what makes the `unsafe` calls of the `avx2`-enabled functions below sound.
+    /// Proof that the CPU has AVX2 and FMA: a value exists only after [`Avx2::detect`] found
+    /// both, which is what makes the `unsafe` calls of the `avx2,fma`-enabled functions below
+    /// sound.
     #[derive(Clone, Copy, Debug)]
     pub struct Avx2(());
 
     impl Avx2 {
-        /// `Some` when the CPU has AVX2, unless the environment variable `HAZE_FORCE_SSE` is set
+        /// `Some` when the CPU has AVX2 and FMA (every AVX2 CPU of Intel and AMD has both),
+        /// unless the environment variable `HAZE_FORCE_SSE` is set
         /// (non-empty): an internal switch for tests and measurements (ARCHITECTURE.md), which
         /// forces the portable kernel on every machine.
         pub fn detect() -> Option<Self> {
             let forced = std::env::var_os("HAZE_FORCE_SSE").is_some_and(|v| !v.is_empty());
-            (!forced && is_x86_feature_detected!("avx2")).then_some(Avx2(()))
+            (!forced && is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"))
+                .then_some(Avx2(()))
         }
 
         /// Runs `f` inside a function compiled with AVX2 enabled, so that everything `f` inlines
         /// (the whole traversal loop, its leaf tests and the [`Avx2`] node test) is compiled for
-        /// AVX2 (VEX encoding, 256-bit registers). One call per query, not per node.
+        /// AVX2 and FMA (VEX encoding, 256-bit registers). One call per query, not per node.
+        /// Rust never contracts `a * b + c` into a fused operation on its own, so the inlined
+        /// triangle tests compute exactly what the portable build computes; only the node
+        /// test's explicit `fmsub` differs.
         #[inline(always)]
         pub fn run<R>(self, f: impl FnOnce() -> R) -> R {
-            #[target_feature(enable = "avx2")]
+            #[target_feature(enable = "avx2,fma")]
             unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
                 f()
             }
-            // SAFETY: `self` exists only if `detect` found AVX2 on this CPU.
+            // SAFETY: `self` exists only if `detect` found AVX2 and FMA on this CPU.
             unsafe { with_avx2(f) }
         }
     }
 
-    /// A ray prepared for [`Avx2`]: the near planes, the origin and the inverse direction
-    /// splatted to 8 lanes.
+    /// A ray prepared for [`Avx2`]: the near planes, the inverse direction and the origin times
+    /// it, splatted to 8 lanes.
     #[derive(Clone, Copy, Debug)]
     pub struct Avx2Ray {
         near: [usize; 3],
-        o: [__m256; 3],
         inv: [__m256; 3],
+        o_inv: [__m256; 3],
         t_min: __m256,
     }
 
     /// # Safety
-    /// The CPU must have AVX2.
+    /// The CPU must have AVX2 and FMA.
     #[inline]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     unsafe fn ray(o: Vec3A, inv_d: Vec3A, t_min: f32) -> Avx2Ray {
         Avx2Ray {
             near: near_planes(inv_d),
-            o: [_mm256_set1_ps(o.x), _mm256_set1_ps(o.y), _mm256_set1_ps(o.z)],
             inv: [_mm256_set1_ps(inv_d.x), _mm256_set1_ps(inv_d.y), _mm256_set1_ps(inv_d.z)],
+            o_inv: [
+                _mm256_set1_ps(o.x * inv_d.x),
+                _mm256_set1_ps(o.y * inv_d.y),
+                _mm256_set1_ps(o.z * inv_d.z),
+            ],
             t_min: _mm256_set1_ps(t_min),
         }
     }
 
-    /// [`super::Sse`]'s test on all 8 lanes at once: the same operations in the same order.
+    /// [`super::Sse`]'s test on all 8 lanes at once, each plane's distance fused (see
+    /// [`NodeTest`]); the same `max`/`min` order and `<=`.
     ///
     /// # Safety
-    /// The CPU must have AVX2.
+    /// The CPU must have AVX2 and FMA.
     #[inline]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     unsafe fn intersect(node: &WideNode, ray: &Avx2Ray, t_max: f32) -> (u32, [f32; WIDTH]) {
         // `Plane` is 32 bytes, 32-byte aligned: an aligned load of all 8 lanes.
         let plane = |p: usize| node.planes[p].0.as_ptr().cast::<f32>();
@@ -250,8 +266,11 @@ mod avx2 {
         let mut hi = _mm256_set1_ps(t_max);
         for a in 0..3 {
             let n = ray.near[a];
-            let t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(plane(n)), ray.o[a]), ray.inv[a]);
-            let t_far = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(plane(n ^ 1)), ray.o[a]), ray.inv[a]);
+            // One fused operation instead of a subtraction and a product: the plane distances
+            // are the start of each node's dependency chain (-2 to -3% per render, docs/
+            // performance.md, "issue 17, twelfth part").
+            let t_near = _mm256_fmsub_ps(_mm256_load_ps(plane(n)), ray.inv[a], ray.o_inv[a]);
+            let t_far = _mm256_fmsub_ps(_mm256_load_ps(plane(n ^ 1)), ray.inv[a], ray.o_inv[a]);
             lo = _mm256_max_ps(lo, t_near);
             hi = _mm256_min_ps(hi, t_far);
         }
@@ -266,7 +285,7 @@ mod avx2 {
 
         #[inline(always)]
         fn ray(self, o: Vec3A, inv_d: Vec3A, t_min: f32) -> Avx2Ray {
-            // SAFETY: `self` exists only if the CPU has AVX2.
+            // SAFETY: `self` exists only if the CPU has AVX2 and FMA.
             unsafe { ray(o, inv_d, t_min) }
         }
 
@@ -520,18 +539,92 @@ mod tests {
     use obvhs::bvh2::builder::build_bvh2;
     use obvhs::BvhBuildParams;
 
-    /// The AVX2 node test gives the portable test's mask and entry distances bit for bit, on
-    /// random nodes of 1 to 8 boxes (some flat, where a ray's entry equals its exit, so `<`
-    /// instead of `<=` would fail) and rays with `±0` direction components. Skipped, with one
-    /// line, where the CPU has no AVX2.
+    /// What the exact slab test says of a lane, given a kernel's rounding.
+    #[derive(Debug)]
+    enum Exact {
+        /// Hit by more than the rounding: the entry and its tolerance.
+        Hit(f64, f64),
+        /// Missed by more than the rounding.
+        Miss,
+        /// Within the rounding of the boundary: either answer is right.
+        Unsure,
+    }
+
+    /// The exact slab test of lane `c` (in f64, where `(plane - o) * inv` of f32 values is
+    /// exact), judged with the rounding of a kernel's f32 test: a few ulps of `(|plane| + |o|)
+    /// |inv|` of the axes that decide the entry and the exit. A box flat on an axis is met where
+    /// the ray crosses that plane, which both kernels compute once for both of its planes: it is
+    /// hit when that crossing lies inside the other axes' interval by more than their rounding.
+    fn exact_slab(node: &WideNode, c: usize, o: Vec3A, inv: Vec3A, t_min: f32, t_max: f32) -> Exact {
+        let (mut lo, mut hi) = ((t_min as f64, 0.0f64), (t_max as f64, 0.0f64));
+        let mut flat = None;
+        for (a, near) in near_planes(inv).into_iter().enumerate() {
+            let (o, inv) = (o[a] as f64, inv[a] as f64);
+            let plane = |p: usize| node.planes[p].lane(c) as f64;
+            let at = |x: f64| ((x - o) * inv, 8.0 * f32::EPSILON as f64 * (x.abs() + o.abs()) * inv.abs());
+            if plane(near) == plane(near ^ 1) {
+                flat = Some(at(plane(near)));
+                continue;
+            }
+            let (t0, t1) = (at(plane(near)), at(plane(near ^ 1)));
+            if t0.0 > lo.0 {
+                lo = t0;
+            }
+            if t1.0 < hi.0 {
+                hi = t1;
+            }
+        }
+        let inside = |t: (f64, f64), lo: (f64, f64), hi: (f64, f64)| {
+            if t.0 - t.1 > lo.0 + lo.1 && t.0 + t.1 < hi.0 - hi.1 {
+                Some(true)
+            } else if t.0 + t.1 < lo.0 - lo.1 || t.0 - t.1 > hi.0 + hi.1 {
+                Some(false)
+            } else {
+                None
+            }
+        };
+        match flat {
+            Some(t) => match inside(t, lo, hi) {
+                Some(true) => Exact::Hit(t.0, t.1),
+                Some(false) => Exact::Miss,
+                None => Exact::Unsure,
+            },
+            None if hi.0 - lo.0 > lo.1 + hi.1 => Exact::Hit(lo.0, lo.1),
+            None if hi.0 - lo.0 < -(lo.1 + hi.1) => Exact::Miss,
+            None => Exact::Unsure,
+        }
+    }
+
+    /// Both node tests against the exact slab test, on random nodes of 1 to 8 boxes (some flat)
+    /// and rays with `±0` direction components: a lane whose exact interval is longer than the
+    /// rounding tolerance is hit, with its entry within the tolerance, one shorter than minus it
+    /// is not, empty slots never are. Then rays through the middle of flat boxes, whose entry
+    /// equals their exit in both kernels (`(plane - o) * inv` and `plane * inv - o * inv` give
+    /// the two planes of the flat axis the same distance): both must hit them, which fails with
+    /// `<` instead of `<=` in either test (checked). The AVX2 half is skipped, with one line,
+    /// where the CPU has no AVX2 and FMA.
     #[test]
-    fn avx2_node_test_matches_the_portable_one_bit_for_bit() {
-        let Some(avx) = Avx2::detect() else {
-            eprintln!("skipped: no AVX2 on this CPU (or HAZE_FORCE_SSE is set)");
-            return;
+    fn node_tests_agree_with_the_exact_slab_test() {
+        let avx = Avx2::detect();
+        if avx.is_none() {
+            eprintln!("skipped (AVX2 half): no AVX2 and FMA on this CPU (or HAZE_FORCE_SSE is set)");
+        }
+        let test = |node: &WideNode, o: Vec3A, inv: Vec3A, t_min: f32, t_max: f32| {
+            let mut out = vec![Sse.intersect(node, &Sse.ray(o, inv, t_min), t_max)];
+            if let Some(k) = avx {
+                out.push(k.intersect(node, &k.ray(o, inv, t_min), t_max));
+            }
+            out
+        };
+        let inverse = |d: Vec3A| {
+            Vec3A::new(
+                obvhs::ray::safe_inverse(d.x),
+                obvhs::ray::safe_inverse(d.y),
+                obvhs::ray::safe_inverse(d.z),
+            )
         };
         let mut s = Sampler::from_seed(17);
-        let (mut hit_lanes, mut touching, mut missed) = (0, 0, 0);
+        let (mut hit_lanes, mut missed, mut unsure) = (0, 0, 0);
         for i in 0..20_000 {
             let r = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
             let count = 1 + i % WIDTH;
@@ -555,34 +648,57 @@ mod tests {
             if i % 4 == 0 {
                 d[(i / 4) % 3] = if i % 8 == 0 { 0.0 } else { -0.0 };
             }
-            let inv = Vec3A::new(
-                obvhs::ray::safe_inverse(d.x),
-                obvhs::ray::safe_inverse(d.y),
-                obvhs::ray::safe_inverse(d.z),
-            );
+            let inv = inverse(d);
             let t_max = if i % 5 == 0 { f32::INFINITY } else { s.next_1d() * 8.0 };
             let t_min = if i % 7 == 0 { s.next_1d() } else { 0.0 };
-            let (m_sse, e_sse) = Sse.intersect(&node, &Sse.ray(o, inv, t_min), t_max);
-            let (m_avx, e_avx) = avx.intersect(&node, &avx.ray(o, inv, t_min), t_max);
-            assert_eq!(m_sse, m_avx, "case {i}");
+            let results = test(&node, o, inv, t_min, t_max);
             for c in 0..WIDTH {
-                if m_sse & (1 << c) != 0 {
-                    assert_eq!(e_sse[c].to_bits(), e_avx[c].to_bits(), "case {i}, lane {c}");
-                    hit_lanes += 1;
-                    // Entry equal to exit: recompute the exit of lane c.
-                    let exit = (0..3)
-                        .map(|a| {
-                            let far = if inv[a] < 0.0 { boxes[c].0.min[a] } else { boxes[c].0.max[a] };
-                            (far - o[a]) * inv[a]
-                        })
-                        .fold(t_max, f32::min);
-                    touching += usize::from(exit == e_sse[c]);
-                } else if c < count {
-                    missed += 1;
+                if c >= count {
+                    assert!(results.iter().all(|(m, _)| m & (1 << c) == 0), "case {i}: empty slot {c} hit");
+                    continue;
+                }
+                let exact = exact_slab(&node, c, o, inv, t_min, t_max);
+                for (k, (mask, entry)) in results.iter().enumerate() {
+                    let hit = mask & (1 << c) != 0;
+                    match exact {
+                        Exact::Hit(lo, tol) => {
+                            assert!(hit, "case {i}, kernel {k}, lane {c}: {exact:?} missed");
+                            assert!(
+                                (entry[c] as f64 - lo).abs() <= tol,
+                                "case {i}, kernel {k}, lane {c}: entry {} vs {exact:?}",
+                                entry[c]
+                            );
+                        }
+                        Exact::Miss => assert!(!hit, "case {i}, kernel {k}, lane {c}: {exact:?} hit"),
+                        Exact::Unsure => {}
+                    }
+                }
+                match exact {
+                    Exact::Hit(..) => hit_lanes += 1,
+                    Exact::Miss => missed += 1,
+                    Exact::Unsure => unsure += 1,
                 }
             }
         }
-        assert!(hit_lanes > 5_000 && missed > 5_000 && touching > 100, "{hit_lanes} {missed} {touching}");
+        assert!(hit_lanes > 5_000 && missed > 5_000 && unsure < 50, "{hit_lanes} {missed} {unsure}");
+
+        // Flat boxes hit through their middle, on each axis, from both sides.
+        for i in 0..3_000 {
+            let r = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
+            let axis = i % 3;
+            let mut hi = Vec3A::splat(1.0);
+            hi[axis] = 0.0;
+            let node = WideNode::new(&[(Aabb::new(Vec3A::ZERO, hi), 1)]);
+            let mut aim = Vec3A::splat(0.1) + r(&mut s) * 0.8;
+            aim[axis] = 0.0;
+            let mut o = r(&mut s) * 4.0 - Vec3A::splat(2.0);
+            o[axis] = if i % 2 == 0 { 1.0 + s.next_1d() } else { -1.0 - s.next_1d() };
+            let inv = inverse((aim - o).normalize());
+            for (k, (mask, entry)) in test(&node, o, inv, 0.0, f32::INFINITY).into_iter().enumerate() {
+                assert_eq!(mask, 1, "flat case {i}, kernel {k}");
+                assert!(entry[0] > 0.0, "flat case {i}, kernel {k}");
+            }
+        }
     }
 
     /// `count` random boxes in a cube of side 10 and both collapses of obvhs's tree over them.
