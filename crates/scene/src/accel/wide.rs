@@ -71,8 +71,10 @@ pub struct WideNode {
 /// in `[t_min, t_max]`. Each plane's distance is `(plane - o) * inv` in [`Sse`] and the fused
 /// `plane * inv - o * inv` in [`Avx2`] (Embree's form; one rounding of the product-difference,
 /// one of `o * inv` per ray): both within a few ulps of `max(|plane|, |o|) |inv|` of the exact
-/// value, far inside the boxes' padding (`BOX_PAD` in `mod.rs`), so both are conservative, but
-/// their masks and entry distances may differ in the last bits at a box's boundary. A flat box
+/// value, an error that grows with `|o|` in either form and stays far inside the boxes' padding
+/// (`BOX_PAD` in `mod.rs`, ~34 ulps of the scene's largest coordinate) for origins within a few
+/// times the scene's extent. Both are conservative alike, but their masks and entry distances
+/// may differ in the last bits at a box's boundary. A flat box
 /// (`min == max` on an axis) gets the same distance for both planes of that axis in either form,
 /// and the test is `entry <= exit`, so a ray through it is never lost.
 pub trait NodeTest: Copy {
