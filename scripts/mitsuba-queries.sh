@@ -18,9 +18,11 @@ addr() { nm -D --defined-only "$lib" | awk -v s="$1" '$3 ~ s { print "0x" $1; ex
 args=""
 for i in $(seq 0 15); do args="$args v$i=+$((i * 4))(%di):s32"; done
 perf probe -q -d 'probe_libembree3:*' 2>/dev/null || true
+data=$(mktemp /tmp/mitsuba-queries.XXXXXX)
+# The probes and the recording go away however the script ends.
+trap 'perf probe -q -d "probe_libembree3:*" 2>/dev/null || true; rm -f "$data"' EXIT
 perf probe -q -x "$lib" --add "isect16=$(addr 'rtcIntersect16EPKi') $args"
 perf probe -q -x "$lib" --add "occl16=$(addr 'rtcOccluded16EPKi') $args"
-data=$(mktemp /tmp/mitsuba-queries.XXXXXX)
 perf record -q -e probe_libembree3:isect16 -e probe_libembree3:occl16 -o "$data" \
     "$python" -c "
 import sys, mitsuba as mi, drjit as dr
@@ -42,5 +44,3 @@ for k in ('isect16', 'occl16'):
     c, l = calls.get(k, 0), lanes.get(k, 0)
     print(f'{k}: {c} calls, {l} active lanes, {l / samples:.3f} per sample, {l / max(c, 1):.2f} lanes per call')
 " "$spp"
-rm -f "$data"
-perf probe -q -d 'probe_libembree3:*'

@@ -47,7 +47,6 @@ use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
-use obvhs::ray::safe_inverse;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use std::mem::MaybeUninit;
@@ -446,7 +445,7 @@ impl Accel {
         stack: &mut [MaybeUninit<Entry>],
         mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
-        let inv = Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
+        let inv = wide::inverse_direction(d);
         let ray = kernel.ray(o, inv, 0.0);
         // Entries `0..sp` are always initialised: each push writes `stack[sp]` before `sp`
         // grows, and every read below is of an index `< sp` (or `== sp` just after a push).

@@ -80,11 +80,20 @@ pub struct WideNode {
 pub trait NodeTest: Copy {
     /// The ray splatted to the kernel's lanes.
     type Ray;
-    /// `inv_d` is the componentwise inverse of the direction, finite (obvhs's `safe_inverse`).
+    /// `inv_d` is the direction's [`inverse_direction`].
     fn ray(self, o: Vec3A, inv_d: Vec3A, t_min: f32) -> Self::Ray;
     /// Bit `c` of the mask set when child `c` is hit, and each child's entry distance, by which
     /// the traversal orders and prunes them (lanes not in the mask are not meaningful).
     fn intersect(self, node: &WideNode, ray: &Self::Ray, t_max: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// The componentwise inverse of a direction that [`NodeTest::ray`] expects: obvhs's
+/// `safe_inverse`, finite and non-zero for every component (a `±0` component gets `±1 /
+/// f32::EPSILON`, keeping its sign).
+#[inline(always)]
+pub fn inverse_direction(d: Vec3A) -> Vec3A {
+    use obvhs::ray::safe_inverse;
+    Vec3A::new(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z))
 }
 
 /// For each axis, which of the two planes is met first: chosen once per ray by the sign of
@@ -618,13 +627,6 @@ mod tests {
             }
             out
         };
-        let inverse = |d: Vec3A| {
-            Vec3A::new(
-                obvhs::ray::safe_inverse(d.x),
-                obvhs::ray::safe_inverse(d.y),
-                obvhs::ray::safe_inverse(d.z),
-            )
-        };
         let mut s = Sampler::from_seed(17);
         let (mut hit_lanes, mut missed, mut unsure) = (0, 0, 0);
         for i in 0..20_000 {
@@ -650,7 +652,7 @@ mod tests {
             if i % 4 == 0 {
                 d[(i / 4) % 3] = if i % 8 == 0 { 0.0 } else { -0.0 };
             }
-            let inv = inverse(d);
+            let inv = inverse_direction(d);
             let t_max = if i % 5 == 0 { f32::INFINITY } else { s.next_1d() * 8.0 };
             let t_min = if i % 7 == 0 { s.next_1d() } else { 0.0 };
             let results = test(&node, o, inv, t_min, t_max);
@@ -695,7 +697,7 @@ mod tests {
             aim[axis] = 0.0;
             let mut o = r(&mut s) * 4.0 - Vec3A::splat(2.0);
             o[axis] = if i % 2 == 0 { 1.0 + s.next_1d() } else { -1.0 - s.next_1d() };
-            let inv = inverse((aim - o).normalize());
+            let inv = inverse_direction((aim - o).normalize());
             for (k, (mask, entry)) in test(&node, o, inv, 0.0, f32::INFINITY).into_iter().enumerate() {
                 assert_eq!(mask, 1, "flat case {i}, kernel {k}");
                 assert!(entry[0] > 0.0, "flat case {i}, kernel {k}");
