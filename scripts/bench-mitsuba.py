@@ -6,7 +6,10 @@
 
 For each scene and round it runs every haze binary, then Mitsuba 3, one after the other (A/B/A/B
 in the same window, so machine load hits both alike), and prints per scene the median camera
-samples per second of each, their ratio, and the min-max spread of the ratio over the rounds.
+samples per second of each, their ratio, and the min-max spread of the ratio over the rounds,
+and the ratio of each renderer's fastest round (this machine runs the same code at two speeds
+about 1.25x apart, docs/performance.md "issue 17, fourteenth part"; the fastest rounds compare
+the two renderers in the faster state, given enough rounds).
 Samples per pixel: `--samples / (width * height)` (rounded up to a multiple of 4), the same for
 both renderers. Times are each renderer's own render time (haze: the `in X s` of its report,
 loading excluded; Mitsuba: `mi.render` of an already-compiled kernel, loading and JIT warm-up
@@ -183,9 +186,9 @@ def main():
     cols = [label for label, _ in hazes] + (["mitsuba"] if mi else [])
     head = "| scene | pixels | spp | " + " | ".join(f"{c} Msamples/s (CPU s)" for c in cols)
     if mi:
-        head += " | " + " | ".join(f"{l}/Mitsuba (min-max)" for l, _ in hazes)
+        head += " | " + " | ".join(f"{l}/Mitsuba (min-max) | {l}/Mitsuba, best rounds" for l, _ in hazes)
     print(head + " |")
-    print("|" + "---|" * (3 + len(cols) + (len(hazes) if mi else 0)))
+    print("|" + "---|" * (3 + len(cols) + (2 * len(hazes) if mi else 0)))
     tmp = tempfile.mkdtemp()
     try:
         for scene in scenes:
@@ -208,11 +211,12 @@ def main():
                 for c in cols
             ]
             if mi and "mitsuba" not in have:
-                cells += ["-"] * len(hazes)
+                cells += ["-"] * (2 * len(hazes))
             elif mi:
                 for label, _ in hazes:
                     ratios = [a / b for a, b in zip(rate[label], rate["mitsuba"])]
                     cells.append(f"**{statistics.median(ratios):.2f}** ({min(ratios):.2f}-{max(ratios):.2f})")
+                    cells.append(f"{max(rate[label]) / max(rate['mitsuba']):.2f}")
             print(f"| {os.path.basename(scene)} | {pixels} | {spp} | " + " | ".join(cells) + " |", flush=True)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

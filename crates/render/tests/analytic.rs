@@ -31,7 +31,18 @@ fn estimate(
     n: usize,
     seed: u64,
 ) -> (PathRadiance, PathRadiance) {
-    let vp = volpath();
+    estimate_with(&volpath(), scene, ray, medium, n, seed)
+}
+
+/// [`estimate`] with a given integrator (a depth limit).
+fn estimate_with(
+    vp: &VolPath,
+    scene: &Scene,
+    ray: Ray,
+    medium: Option<u32>,
+    n: usize,
+    seed: u64,
+) -> (PathRadiance, PathRadiance) {
     let mut sum = PathRadiance::default();
     let mut sum2 = PathRadiance::default();
     for i in 0..n {
@@ -208,6 +219,44 @@ fn glass_ball_white_furnace() {
                 mean.get(Component::Surface).max_component() > 0.9,
                 "light through glass is surface light"
             );
+        }
+    }
+}
+
+/// Passing through thin glass is not a scattering event, so it does not count towards the
+/// depth (Mitsuba 3's `Null`-typed component): with `max_depth` 1 (directly visible emitters
+/// only) the environment behind a thin-glass sphere is seen through both of its sheets, with
+/// radiance `(1 - R')^2` at normal incidence (`R' = 2R / (1 + R)`, `R` the Fresnel reflectance
+/// of one interface; the reflected paths scatter and end at the limit). A path must not stop at
+/// the last vertex its depth allows when the BSDF there may let light straight through.
+#[test]
+fn thin_glass_does_not_count_towards_the_depth() {
+    let eta = 1.5f32;
+    let scene = one_shape_in_environment(
+        None,
+        "thin",
+        Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
+        Bsdf::ThinDielectric { eta },
+        None,
+        medium(Rgb::ONE, Rgb::ZERO, Phase::Isotropic),
+    );
+    let r = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    let expected = (1.0 - 2.0 * r / (1.0 + r)).powi(2);
+    for max_depth in [1, 2] {
+        let vp = VolPath { max_depth, rr_depth: 5, hide_emitters: false };
+        let ray = Ray::new(Vec3::new(0.0, 0.0, -4.0), Vec3::Z);
+        let (mean, se) = estimate_with(&vp, &scene, ray, None, 20_000, 9);
+        let got = mean.total();
+        let tol = 4.0 * se.total().max_component() + 1e-4;
+        if max_depth == 1 {
+            assert!(
+                (got.mean() - expected).abs() < tol,
+                "max_depth 1: {got:?} against {expected} (tol {tol})"
+            );
+        } else {
+            // One reflection more is allowed: the light reflected towards the camera by the
+            // sphere's far sheet after passing the near one adds to it.
+            assert!(got.mean() > expected + 0.01, "max_depth 2: {got:?} against more than {expected}");
         }
     }
 }

@@ -86,6 +86,17 @@ impl Bsdf {
         }
     }
 
+    /// True for BSDFs that can return a null-typed sample ([`BsdfSample::null`]: light passing
+    /// straight through, which is not a scattering event and does not count towards a path's
+    /// depth): `null` and `thindielectric`'s transmission.
+    pub fn may_pass_through(&self) -> bool {
+        match self {
+            Bsdf::Null | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::TwoSided(b) => b.may_pass_through(),
+            _ => false,
+        }
+    }
+
     /// True when the BSDF has no effect on light at all besides absorbing it
     /// (a black diffuse surface): paths end there.
     pub fn is_black(&self) -> bool {
@@ -305,6 +316,38 @@ mod tests {
             let smp = b.sample(wi, s.next_1d(), s.next_2d(), Vec2::ZERO).unwrap();
             let w = b.eval(wi, smp.wo, Vec2::ZERO) / b.pdf(wi, smp.wo, Vec2::ZERO);
             assert!((w - smp.weight).max_component().abs() < 1e-4);
+        }
+    }
+
+    /// `may_pass_through` says exactly which BSDFs sample null-typed directions (volpath stops
+    /// a path at its depth limit only where none can be drawn).
+    #[test]
+    fn may_pass_through_matches_the_samples() {
+        use self::microfacet::{Microfacet, MicrofacetType};
+        let kinds = [
+            Bsdf::Null,
+            Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() },
+            Bsdf::Dielectric { eta: 1.5 },
+            Bsdf::ThinDielectric { eta: 1.5 },
+            Bsdf::TwoSided(Box::new(Bsdf::ThinDielectric { eta: 1.5 })),
+            Bsdf::TwoSided(Box::new(Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() })),
+            Bsdf::RoughDielectric(roughdielectric::RoughDielectric {
+                distr: Microfacet::new(MicrofacetType::Beckmann, 0.3, true),
+                eta: 1.5,
+            }),
+        ];
+        let mut s = Sampler::from_seed(5);
+        for b in &kinds {
+            let mut null = false;
+            for i in 0..2000 {
+                let wi = if i % 2 == 0 {
+                    Vec3::new(0.0, 0.6, 0.8)
+                } else {
+                    Vec3::new(0.3, 0.0, -0.95).normalize()
+                };
+                null |= b.sample(wi, s.next_1d(), s.next_2d(), Vec2::ZERO).is_some_and(|x| x.null);
+            }
+            assert_eq!(b.may_pass_through(), null, "{b:?}");
         }
     }
 
