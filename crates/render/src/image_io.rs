@@ -44,13 +44,23 @@ impl RgbImage {
     }
 
     /// Writes a linear RGB 32-bit float EXR. Refuses images with NaN or Inf.
+    ///
+    /// Tiles in increasing order (`LineOrder::Increasing`): the `exr` crate compresses tiles on
+    /// several threads and, with its default unspecified order, stores them in the order they
+    /// finish, so the same image gave files that differed in their bytes (never in their
+    /// pixels) from run to run. In order, one seed gives one file.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
+        use exr::prelude::*;
         self.check_finite(path)?;
-        exr::prelude::write_rgb_file(path, self.width, self.height, |x, y| {
+        let channels = SpecificChannels::rgb(|Vec2(x, y)| {
             let p = self.pixel(x, y);
             (p[0], p[1], p[2])
-        })
-        .map_err(|e| ImageError::Io { path: path.display().to_string(), message: e.to_string() })
+        });
+        let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
+        Image::from_encoded_channels((self.width, self.height), encoding, channels)
+            .write()
+            .to_file(path)
+            .map_err(|e| ImageError::Io { path: path.display().to_string(), message: e.to_string() })
     }
 
     /// Writes an 8-bit sRGB PNG: linear values times `2^exposure`, clamped to `[0, 1]`, sRGB curve.
@@ -112,6 +122,28 @@ mod tests {
         bad.data[4] = f32::NAN;
         let err = bad.write_exr(&dir.join("b.exr")).unwrap_err().to_string();
         assert!(err.contains("pixel (1, 0) is not finite"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Tiles are stored in increasing order, so writing the same image again gives the same
+    /// bytes (an image of many tiles, which the `exr` crate compresses in parallel).
+    #[test]
+    fn exr_files_are_reproducible() {
+        let dir = std::env::temp_dir().join(format!("haze-io-order-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (w, h) = (300, 200);
+        let img = RgbImage::new(w, h, (0..w * h * 3).map(|i| ((i * 7919) % 1000) as f32 * 1e-3).collect());
+        let first = dir.join("first.exr");
+        img.write_exr(&first).unwrap();
+        let meta = exr::meta::MetaData::read_from_file(&first, false).unwrap();
+        assert_eq!(meta.headers[0].line_order, exr::meta::attribute::LineOrder::Increasing);
+        let bytes = std::fs::read(&first).unwrap();
+        for i in 0..5 {
+            let again = dir.join(format!("again{i}.exr"));
+            img.write_exr(&again).unwrap();
+            assert!(std::fs::read(&again).unwrap() == bytes, "rewrite {i} differs");
+        }
+        assert_eq!(RgbImage::read_exr(&first).unwrap(), img);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -7,7 +7,10 @@
 //! references come from it:
 //! - `depth` counts scattering events (medium and non-null surface); a null-surface crossing is
 //!   not an event. A path stops once `depth >= max_depth`; a medium event that reaches
-//!   `max_depth` contributes nothing; surface NEE needs `depth + 1 < max_depth`.
+//!   `max_depth` contributes nothing; surface NEE needs `depth + 1 < max_depth`. So the last
+//!   vertex the depth allows adds only what it emits: no NEE, and no BSDF sample unless the
+//!   BSDF may pass light through (thin glass: not an event), since its direction would not be
+//!   followed.
 //! - Russian roulette once `depth > rr_depth`, survival `q = min(max(throughput) eta^2, 0.95)`.
 //! - Media change only at shapes that declare an interior or exterior medium.
 //! - Emitters are sampled uniformly; NEE and phase/BSDF sampling are combined with the power
@@ -111,9 +114,11 @@ impl Integrator for VolPath {
             // medium delta tracking draws first, and the hint is wasted): an environment map's
             // cache misses for that sample then overlap the traversal below.
             // No emitter can light a point in this medium: its next-event estimation below is
-            // skipped, and so is the hint.
+            // skipped, and so is the hint; so it is at the last vertex the depth allows, which
+            // estimates nothing (a vertex at `depth` does next-event estimation only if
+            // `depth + 1 < max_depth`, on a surface or in a medium).
             let unlit = scene.medium_unlit(medium);
-            if !unlit {
+            if !unlit && depth + 1 < max_depth {
                 scene.prefetch_emitter_sample(sampler);
             }
             // The surface interaction only once the path reaches the surface (below).
