@@ -23,19 +23,8 @@ fn volpath() -> VolPath {
     VolPath { max_depth: -1, rr_depth: 5, hide_emitters: false }
 }
 
-/// Mean and standard error of `n` estimates of one ray's radiance, per component.
+/// Mean and standard error of `n` estimates by `vp` of one ray's radiance, per component.
 fn estimate(
-    scene: &Scene,
-    ray: Ray,
-    medium: Option<u32>,
-    n: usize,
-    seed: u64,
-) -> (PathRadiance, PathRadiance) {
-    estimate_with(&volpath(), scene, ray, medium, n, seed)
-}
-
-/// [`estimate`] with a given integrator (a depth limit).
-fn estimate_with(
     vp: &VolPath,
     scene: &Scene,
     ray: Ray,
@@ -104,7 +93,7 @@ fn transmittance_through_a_slab() {
         medium(sigma_t, Rgb::ZERO, Phase::Isotropic),
     );
     let ray = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
-    let (mean, se) = estimate(&scene, ray, None, 40_000, 1);
+    let (mean, se) = estimate(&volpath(), &scene, ray, None, 40_000, 1);
     let expected = sigma_t.exp_neg(2.0);
     let got = mean.get(Component::Emitted);
     for c in 0..3 {
@@ -135,7 +124,7 @@ fn single_scattering_of_a_point_light_matches_quadrature() {
             vec![Emitter::Point { position: light, intensity }],
         );
         let ray = Ray::new(Vec3::ZERO, Vec3::Z);
-        let (mean, se) = estimate(&scene, ray, Some(0), 200_000, 7);
+        let (mean, se) = estimate(&volpath(), &scene, ray, Some(0), 200_000, 7);
 
         // Quadrature on u in [0, 60] with a substitution-free fine midpoint rule.
         let (st, n) = (0.6f64, 2_000_000);
@@ -178,7 +167,7 @@ fn white_furnace_in_infinite_scattering_medium() {
         medium(Rgb::new(1.0, 2.0, 0.5), Rgb::ONE, Phase::HenyeyGreenstein { g: 0.3 }),
     );
     let ray = Ray::new(Vec3::ZERO, Vec3::new(0.3, 0.2, 0.9).normalize());
-    let (mean, se) = estimate(&scene, ray, Some(0), 20_000, 3);
+    let (mean, se) = estimate(&volpath(), &scene, ray, Some(0), 20_000, 3);
     assert_white(&mean, &se, "infinite medium");
 }
 
@@ -213,7 +202,7 @@ fn glass_ball_white_furnace() {
             medium(Rgb::new(0.5, 1.0, 2.0), Rgb::ONE, Phase::HenyeyGreenstein { g: -0.4 }),
         );
         for o in [Vec3::new(0.0, 0.0, -4.0), Vec3::new(0.6, 0.0, -4.0), Vec3::new(0.0, 0.95, -4.0)] {
-            let (mean, se) = estimate(&scene, Ray::new(o, Vec3::Z), None, 20_000, 5);
+            let (mean, se) = estimate(&volpath(), &scene, Ray::new(o, Vec3::Z), None, 20_000, 5);
             assert_white(&mean, &se, &format!("interior {interior:?}, origin {o}"));
             assert!(
                 mean.get(Component::Surface).max_component() > 0.9,
@@ -245,7 +234,7 @@ fn thin_glass_does_not_count_towards_the_depth() {
     for max_depth in [1, 2] {
         let vp = VolPath { max_depth, rr_depth: 5, hide_emitters: false };
         let ray = Ray::new(Vec3::new(0.0, 0.0, -4.0), Vec3::Z);
-        let (mean, se) = estimate_with(&vp, &scene, ray, None, 20_000, 9);
+        let (mean, se) = estimate(&vp, &scene, ray, None, 20_000, 9);
         let got = mean.total();
         let tol = 4.0 * se.total().max_component() + 1e-4;
         if max_depth == 1 {
