@@ -186,7 +186,7 @@ def main():
     cols = [label for label, _ in hazes] + (["mitsuba"] if mi else [])
     head = "| scene | pixels | spp | " + " | ".join(f"{c} Msamples/s (CPU s)" for c in cols)
     if mi:
-        head += " | " + " | ".join(f"{l}/Mitsuba (min-max) | {l}/Mitsuba, best rounds" for l, _ in hazes)
+        head += " | " + " | ".join(f"{l}/Mitsuba (min-max) | {l}/Mitsuba, fastest rounds" for l, _ in hazes)
     print(head + " |")
     print("|" + "---|" * (3 + len(cols) + (2 * len(hazes) if mi else 0)))
     tmp = tempfile.mkdtemp()
