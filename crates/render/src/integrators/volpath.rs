@@ -230,6 +230,15 @@ impl Integrator for VolPath {
             if shape.bsdf.is_black() {
                 break;
             }
+            // The last vertex the depth allows estimates nothing more (next-event estimation
+            // below needs `depth + 1 < max_depth`), and a sampled direction would only be
+            // followed to stop at the depth check, unless the BSDF passes light through without
+            // a scattering event (thin glass), which does not count towards the depth. The
+            // path's estimate is the same; only its sampler draws less (so at one sample per
+            // pass, the default, the image is the same bit for bit).
+            if depth + 1 >= max_depth && !shape.bsdf.may_pass_through() {
+                break;
+            }
 
             let frame = Frame::from_normal(h.ns);
             let wi = frame.to_local(-ray.d);
@@ -240,14 +249,6 @@ impl Integrator for VolPath {
                 out.add(Component::Surface, beta * direct / r.mean());
             }
 
-            // The last vertex the depth allows: a sampled direction would only be followed to
-            // stop at the depth check, unless the BSDF passes light through without a scattering
-            // event (thin glass), which does not count towards the depth. The path's estimate is
-            // the same; only its sampler draws less (so at one sample per pass, the default, the
-            // image is the same bit for bit).
-            if depth + 1 >= max_depth && !shape.bsdf.may_pass_through() {
-                break;
-            }
             let Some(bs) = shape.bsdf.sample(wi, sampler.next_1d(), sampler.next_2d(), h.uv) else { break };
             beta *= bs.weight;
             eta *= bs.eta;
