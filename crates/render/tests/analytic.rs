@@ -243,8 +243,9 @@ fn thin_glass_does_not_count_towards_the_depth() {
                 "max_depth 1: {got:?} against {expected} (tol {tol})"
             );
         } else {
-            // One reflection more is allowed: the light reflected towards the camera by the
-            // sphere's far sheet after passing the near one adds to it.
+            // One reflection more is allowed: the environment reflected by either sheet (the
+            // near one's outside, or the far one's inside and then out through the near one)
+            // adds to it.
             assert!(got.mean() > expected + 0.01, "max_depth 2: {got:?} against more than {expected}");
         }
     }
