@@ -1,7 +1,7 @@
 //! The scene the integrators render: camera, shapes, media, emitters, integrator settings, and
 //! ray queries through the acceleration structure.
 
-use crate::accel::{Accel, PreliminaryHit, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
+use crate::accel::{Accel, CameraGrid, PreliminaryHit, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::emitter_tables::EmitterTables;
@@ -11,6 +11,7 @@ use crate::shape::{closed, Shape};
 use glam::Vec3;
 use haze_core::Ray;
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 /// The `<integrator>` element: its plugin name and the parameters every integrator shares.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,6 +73,10 @@ pub struct Scene {
     pub emitters: Vec<Emitter>,
     pub(crate) emitter_tables: EmitterTables,
     accel: Accel,
+    /// The film grid of leaf lists that answers camera rays ([`Self::intersect_camera`]), built
+    /// on the first camera ray. It answers any ray from its pinhole correctly, so a camera
+    /// changed after it was built makes it useless to other rays, never wrong.
+    camera_grid: OnceLock<Option<CameraGrid>>,
     /// Every shape stops shadow rays ([`Shape::blocks_shadow_rays`]: no `null` or thin
     /// dielectric surface).
     every_surface_blocks: bool,
@@ -156,6 +161,7 @@ impl Scene {
             media,
             emitters,
             accel,
+            camera_grid: OnceLock::new(),
             every_surface_blocks,
             every_emitter_at_infinity,
             sealed,
@@ -207,6 +213,21 @@ impl Scene {
     /// ([`Accel::intersect_preliminary`]); [`Self::interaction`] completes it.
     pub fn intersect_preliminary(&self, ray: &Ray) -> Option<PreliminaryHit> {
         self.accel.intersect_preliminary(ray)
+    }
+
+    /// [`Self::intersect_preliminary`] for a ray the camera generated (its line through the
+    /// pinhole): the same answer, from the camera grid ([`CameraGrid`], built on the first
+    /// call) instead of the tree. Any other ray is answered by the tree.
+    pub fn intersect_camera(&self, ray: &Ray) -> Option<PreliminaryHit> {
+        match self.camera_grid.get_or_init(|| CameraGrid::build(&self.accel, &self.camera)) {
+            Some(grid) => self.accel.intersect_camera(grid, ray),
+            None => self.accel.intersect_preliminary(ray),
+        }
+    }
+
+    /// The camera grid's cells, cells left to the tree, and list entries, once it is built.
+    pub fn camera_grid_counts(&self) -> Option<(usize, usize, usize)> {
+        self.camera_grid.get().and_then(|g| g.as_ref()).map(CameraGrid::counts)
     }
 
     /// The surface interaction of a hit from [`Self::intersect_preliminary`].

@@ -81,6 +81,9 @@ impl Integrator for VolPath {
         let mut specular_chain = true;
         let mut last_pdf = 1.0f32;
         let mut last_p = ray.o;
+        // The path's first query is usually a camera ray's (the render loop's), which the
+        // scene answers from its camera grid; `intersect_camera` checks that it is one.
+        let mut first_query = true;
 
         loop {
             if depth > self.rr_depth {
@@ -122,7 +125,11 @@ impl Integrator for VolPath {
                 scene.prefetch_emitter_sample(sampler);
             }
             // The surface interaction only once the path reaches the surface (below).
-            let hit = scene.intersect_preliminary(&query);
+            let hit = if std::mem::take(&mut first_query) {
+                scene.intersect_camera(&query)
+            } else {
+                scene.intersect_preliminary(&query)
+            };
             let t_surface = hit.map_or(ray.t_max, |h| h.t());
 
             if let Some(mid) = medium {

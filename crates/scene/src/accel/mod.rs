@@ -34,8 +34,11 @@
 //! Coordinates whose magnitude the triangle test cannot handle are refused when the scene is
 //! built ([`MAX_COORDINATE`]).
 
+mod camera_grid;
 mod watertight;
 mod wide;
+
+pub use camera_grid::CameraGrid;
 
 pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
 use wide::{Avx2, NodeTest, WideBvh, WideTree, LEAF, LEAF_SIZE, WIDTH};
@@ -581,6 +584,48 @@ impl Accel {
                 best = Some(PreliminaryHit(Hit::Triangle { leaf, lane: lane as u32, t, b1, b2 }));
             }
         }
+        self.closest_analytic(ray, t_max, best)
+    }
+
+    /// [`Self::intersect_preliminary`] for a ray from the camera's pinhole, from `grid`'s list of
+    /// the ray's cell ([`CameraGrid`], the same answer); rays the grid cannot answer go through
+    /// the tree.
+    pub fn intersect_camera(&self, grid: &CameraGrid, ray: &Ray) -> Option<PreliminaryHit> {
+        let Some((list, from_apex)) = grid.list(ray) else {
+            return self.intersect_preliminary(ray);
+        };
+        let wt = WatertightRay::new(ray.o.into(), ray.d.into());
+        let mut t_max = ray.t_max;
+        let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
+        for &(leaf, near) in list {
+            // No point of this leaf or the ones after it lies closer than `near` to the pinhole,
+            // and the ray's points before `t_max` lie within `from_apex + t_max` of it.
+            if near > from_apex + t_max {
+                break;
+            }
+            let hits = wt.intersect_packet(&self.leaves[leaf as usize].packet, T_MIN, t_max);
+            if let Some(lane) = hits.closest() {
+                t_max = hits.t[lane];
+                let (b1, b2) = hits.barycentrics(lane);
+                closest = Some((leaf, lane, t_max, b1, b2));
+            }
+        }
+        let best = closest.map(|(leaf, lane, t, b1, b2)| {
+            prefetch(&self.leaf_ids[leaf as usize]);
+            PreliminaryHit(Hit::Triangle { leaf, lane: lane as u32, t, b1, b2 })
+        });
+        self.closest_analytic(ray, t_max, best)
+    }
+
+    /// The closest of `best` (the closest triangle hit, at `t_max`, if any) and the analytic
+    /// shapes' hits before `t_max`.
+    #[inline(always)]
+    fn closest_analytic(
+        &self,
+        ray: &Ray,
+        mut t_max: f32,
+        mut best: Option<PreliminaryHit>,
+    ) -> Option<PreliminaryHit> {
         for a in &self.analytic {
             let r = Ray { t_max, ..*ray };
             match a {

@@ -67,6 +67,16 @@ pub struct WideNode {
     planes: [Plane; 6],
 }
 
+impl WideNode {
+    /// Child slot `c`'s box `(min, max)`, `None` for an empty slot.
+    pub fn child_bounds(&self, c: usize) -> Option<(glam::Vec3, glam::Vec3)> {
+        let p = |i: usize| self.planes[i].lane(c);
+        let lo = glam::Vec3::new(p(0), p(2), p(4));
+        let hi = glam::Vec3::new(p(1), p(3), p(5));
+        (lo.cmple(hi).all()).then_some((lo, hi))
+    }
+}
+
 /// A node test: the slab test of all [`WIDTH`] children of a node (Kay and Kajiya 1986) for `t`
 /// in `[t_min, t_max]`. Each plane's distance is `(plane - o) * inv` in [`Sse`] and the fused
 /// `plane * inv - o * inv` in [`Avx2`] (Embree's form; one rounding of the product-difference,
