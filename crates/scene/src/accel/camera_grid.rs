@@ -33,6 +33,12 @@ const MAX_CELLS: f64 = 65_536.0;
 /// cell). On the peer scenes no cell reaches it.
 const MAX_TESTS: usize = 48;
 
+/// Fewest nodes a closest-hit tree needs for a grid. In a smaller tree (rooms and boxes of a few
+/// dozen triangles) a camera ray visits one or two nodes, and the grid's cell lookup cost about
+/// what it saved: hg-box, bench-fog-shadow and bench-spot-beam (1-3 nodes) measured 3-7% slower
+/// with a grid (docs/performance.md, "issue 17, fifteenth part").
+const MIN_NODES: usize = 16;
+
 /// Longest list a cell keeps (memory: 8 bytes per entry).
 const MAX_LIST: usize = 1024;
 
@@ -79,8 +85,17 @@ impl Pyramid {
 }
 
 impl CameraGrid {
-    /// The grid of `camera` over `accel`'s triangles; `None` when there are none.
+    /// The grid of `camera` over `accel`'s triangles; `None` when there are none or too few to
+    /// gain from it ([`MIN_NODES`]).
     pub fn build(accel: &Accel, camera: &Camera) -> Option<Self> {
+        if accel.bvh.as_ref()?.closest.nodes.len() < MIN_NODES {
+            return None;
+        }
+        Self::build_any(accel, camera)
+    }
+
+    /// [`Self::build`] for a tree of any size.
+    fn build_any(accel: &Accel, camera: &Camera) -> Option<Self> {
         let bvh = accel.bvh.as_ref()?;
         let m = camera.to_world.as_dmat4();
         let apex = m.transform_point3(DVec3::ZERO);
@@ -331,7 +346,7 @@ mod tests {
     /// many the grid answered (not left to the tree).
     fn agree(shapes: &[Shape], cam: &Camera, rays: usize, seed: u64) -> usize {
         let accel = Accel::build(shapes);
-        let grid = CameraGrid::build(&accel, cam).expect("the scene has triangles");
+        let grid = CameraGrid::build_any(&accel, cam).expect("the scene has triangles");
         let generator = cam.ray_generator();
         let mut s = Sampler::new(seed, 0, 0);
         let mut answered = 0;
@@ -434,7 +449,7 @@ mod tests {
             (8, 8),
             PixelFilter::Box,
         );
-        let grid = CameraGrid::build(&accel, &cam).unwrap();
+        let grid = CameraGrid::build_any(&accel, &cam).unwrap();
         let ray = cam.generate_ray(glam::Vec2::new(4.2, 3.7));
         assert!(grid.list(&ray).is_some());
         let side = ray.d.cross(Vec3::Y).normalize();
@@ -446,8 +461,8 @@ mod tests {
         assert!(grid.list(&Ray { o: cam.position() - 0.05 * ray.d, d: -ray.d, t_max: 10.0 }).is_none());
     }
 
-    /// A cell whose pyramid holds more than [`MAX_LIST`] leaves is left to the tree; the grid of
-    /// a scene without triangles is `None`.
+    /// A cell whose rays would test too many leaves is left to the tree; a scene without
+    /// triangles has no grid, nor one whose tree is smaller than [`MIN_NODES`].
     #[test]
     fn crowded_cells_and_empty_scenes() {
         let mut s = Sampler::from_seed(3);
@@ -460,12 +475,16 @@ mod tests {
             (3, 2),
             PixelFilter::Box,
         );
-        let grid = CameraGrid::build(&accel, &cam).unwrap();
+        let grid = CameraGrid::build_any(&accel, &cam).unwrap();
         let (cells, crowded, _) = grid.counts();
         assert_eq!((cells, crowded), (6, 6));
         let ray = cam.generate_ray(glam::Vec2::new(1.5, 1.0));
         assert!(grid.list(&ray).is_none());
         let none = vec![shape(Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false })];
-        assert!(CameraGrid::build(&Accel::build(&none), &cam).is_none());
+        assert!(CameraGrid::build_any(&Accel::build(&none), &cam).is_none());
+        // A room of 12 triangles is one node: no grid.
+        let room = vec![shape(Geometry::Mesh(cube_mesh(&Mat4::IDENTITY, true)))];
+        assert!(CameraGrid::build(&Accel::build(&room), &cam).is_none());
+        assert!(CameraGrid::build_any(&Accel::build(&room), &cam).is_some());
     }
 }

@@ -31,6 +31,9 @@
 //!   ([`wide::WideNode::intersect`]) starts boxes at `t = 0` of that ray; the back-off is kept
 //!   as a second guard.
 //!
+//! Camera rays, which all leave the pinhole, are answered without the tree from a grid of leaf
+//! lists over the film ([`CameraGrid`], `camera_grid.rs`).
+//!
 //! Coordinates whose magnitude the triangle test cannot handle are refused when the scene is
 //! built ([`MAX_COORDINATE`]).
 
@@ -594,7 +597,9 @@ impl Accel {
         let Some((list, from_apex)) = grid.list(ray) else {
             return self.intersect_preliminary(ray);
         };
-        let wt = WatertightRay::new(ray.o.into(), ray.d.into());
+        // Prepared on the first triangle test: a flight cut short in a medium often ends
+        // before the first leaf.
+        let mut wt: Option<WatertightRay> = None;
         let mut t_max = ray.t_max;
         let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
         for &(leaf, near) in list {
@@ -603,6 +608,7 @@ impl Accel {
             if near > from_apex + t_max {
                 break;
             }
+            let wt = wt.get_or_insert_with(|| WatertightRay::new(ray.o.into(), ray.d.into()));
             let hits = wt.intersect_packet(&self.leaves[leaf as usize].packet, T_MIN, t_max);
             if let Some(lane) = hits.closest() {
                 t_max = hits.t[lane];
