@@ -116,6 +116,9 @@ pub fn render<I: Integrator>(
     // Rounds grow until they take about `ROUND_SECONDS` of wall time.
     let batchable = integrator.passes_batchable();
     let rays = cam.ray_generator();
+    // Camera rays' closest hits come from the scene's camera grid: built here on the pool,
+    // rather than on one thread by the first camera ray.
+    scene.prepare_camera_grid();
     let mut round = 1u64;
     loop {
         let done = film.samples;

@@ -219,10 +219,22 @@ impl Scene {
     /// pinhole): the same answer, from the camera grid ([`CameraGrid`], built on the first
     /// call) instead of the tree. Any other ray is answered by the tree.
     pub fn intersect_camera(&self, ray: &Ray) -> Option<PreliminaryHit> {
-        match self.camera_grid.get_or_init(|| CameraGrid::build(&self.accel, &self.camera)) {
+        // Built here on one thread (inside a render's parallel loop a pool build could deadlock:
+        // see `CameraGrid::build`); the render loop builds it before, on the pool.
+        match self.camera_grid.get_or_init(|| CameraGrid::build(&self.accel, &self.camera, false)) {
             Some(grid) => self.accel.intersect_camera(grid, ray),
             None => self.accel.intersect_preliminary(ray),
         }
+    }
+
+    /// Builds the camera grid of [`Self::intersect_camera`] now, its rows in parallel on
+    /// rayon's pool (the same grid as a build on the first camera ray) unless called from one
+    /// of the pool's threads. For callers about to render: at 256x256 pixels the grid's 65,536
+    /// cells took about 0.1 s on one thread, while the other threads waited.
+    pub fn prepare_camera_grid(&self) {
+        // On one thread when called from a pool thread (see `CameraGrid::build`).
+        let parallel = rayon::current_thread_index().is_none();
+        self.camera_grid.get_or_init(|| CameraGrid::build(&self.accel, &self.camera, parallel));
     }
 
     /// The camera grid's cells, cells left to the tree, and list entries, once it is built.

@@ -22,6 +22,7 @@ use super::{wide::WideNode, Accel, LEAF, WIDTH};
 use crate::camera::Camera;
 use glam::{DMat3, DVec3, Mat3, Vec3};
 use haze_core::Ray;
+use rayon::prelude::*;
 
 /// Most cells the grid has: cells are one pixel up to this many pixels, larger beyond (the
 /// build visits the tree once per cell, about 2 us each on the peer scenes).
@@ -62,6 +63,10 @@ pub struct CameraGrid {
     tolerance: f32,
 }
 
+/// A row of cells while the grid is built: each cell's `(start, count)` within the row's
+/// entries, and the entries.
+type Row = (Vec<[u32; 2]>, Vec<(u32, f32)>);
+
 /// A cell's pyramid: points `x` with `n . (x - apex) <= margin` for each plane normal `n`
 /// (four sides and the plane through the apex facing backwards).
 struct Pyramid {
@@ -87,15 +92,18 @@ impl Pyramid {
 impl CameraGrid {
     /// The grid of `camera` over `accel`'s triangles; `None` when there are none or too few to
     /// gain from it ([`MIN_NODES`]).
-    pub fn build(accel: &Accel, camera: &Camera) -> Option<Self> {
+    /// `parallel` builds its rows on rayon's pool. Not from a pool thread inside a one-time
+    /// initialisation (`OnceLock`): while it waits for its rows, the thread may run another task
+    /// that asks for the same grid, and would wait on itself.
+    pub fn build(accel: &Accel, camera: &Camera, parallel: bool) -> Option<Self> {
         if accel.bvh.as_ref()?.closest.nodes.len() < MIN_NODES {
             return None;
         }
-        Self::build_any(accel, camera)
+        Self::build_any(accel, camera, parallel)
     }
 
     /// [`Self::build`] for a tree of any size.
-    fn build_any(accel: &Accel, camera: &Camera) -> Option<Self> {
+    fn build_any(accel: &Accel, camera: &Camera, parallel: bool) -> Option<Self> {
         let bvh = accel.bvh.as_ref()?;
         let m = camera.to_world.as_dmat4();
         let apex = m.transform_point3(DVec3::ZERO);
@@ -121,11 +129,12 @@ impl CameraGrid {
             let t = accel.leaves[leaf as usize].packet.triangle(lane);
             [0, 1, 2].map(|j| Vec3::from(t.vertex(j)).as_dvec3())
         };
-        let mut spans = Vec::with_capacity((nx * ny) as usize);
-        let mut entries: Vec<(u32, f32)> = Vec::new();
-        let mut stack = Vec::new();
-        let mut found: Vec<(u32, f32)> = Vec::new();
-        for cy in 0..ny {
+        // One row of cells: its spans (starts within the row's entries) and entries.
+        let row = |cy: u32| {
+            let mut spans = Vec::with_capacity(nx as usize);
+            let mut entries: Vec<(u32, f32)> = Vec::new();
+            let mut stack = Vec::new();
+            let mut found: Vec<(u32, f32)> = Vec::new();
             for cx in 0..nx {
                 // Widened by a thousandth of the cell and a millionth of the film, far above
                 // the f32 rounding of a direction's slopes (`to_local * d`, ~1e-7 of the film).
@@ -206,6 +215,16 @@ impl CameraGrid {
                 spans.push([entries.len() as u32, found.len() as u32]);
                 entries.extend_from_slice(&found);
             }
+            (spans, entries)
+        };
+        let rows: Vec<Row> =
+            if parallel { (0..ny).into_par_iter().map(row).collect() } else { (0..ny).map(row).collect() };
+        let mut spans = Vec::with_capacity((nx * ny) as usize);
+        let mut entries = Vec::with_capacity(rows.iter().map(|r| r.1.len()).sum());
+        for (row_spans, row_entries) in rows {
+            let base = entries.len() as u32;
+            spans.extend(row_spans.into_iter().map(|[start, count]| [start + base, count]));
+            entries.extend(row_entries);
         }
         Some(CameraGrid {
             apex: apex.as_vec3(),
@@ -346,7 +365,10 @@ mod tests {
     /// many the grid answered (not left to the tree).
     fn agree(shapes: &[Shape], cam: &Camera, rays: usize, seed: u64) -> usize {
         let accel = Accel::build(shapes);
-        let grid = CameraGrid::build_any(&accel, cam).expect("the scene has triangles");
+        let grid = CameraGrid::build_any(&accel, cam, true).expect("the scene has triangles");
+        // Rows built on the pool or one after the other: the same grid.
+        let serial = CameraGrid::build_any(&accel, cam, false).unwrap();
+        assert!(grid.spans == serial.spans && grid.entries == serial.entries);
         let generator = cam.ray_generator();
         let mut s = Sampler::new(seed, 0, 0);
         let mut answered = 0;
@@ -449,7 +471,7 @@ mod tests {
             (8, 8),
             PixelFilter::Box,
         );
-        let grid = CameraGrid::build_any(&accel, &cam).unwrap();
+        let grid = CameraGrid::build_any(&accel, &cam, false).unwrap();
         let ray = cam.generate_ray(glam::Vec2::new(4.2, 3.7));
         assert!(grid.list(&ray).is_some());
         let side = ray.d.cross(Vec3::Y).normalize();
@@ -475,16 +497,16 @@ mod tests {
             (3, 2),
             PixelFilter::Box,
         );
-        let grid = CameraGrid::build_any(&accel, &cam).unwrap();
+        let grid = CameraGrid::build_any(&accel, &cam, false).unwrap();
         let (cells, crowded, _) = grid.counts();
         assert_eq!((cells, crowded), (6, 6));
         let ray = cam.generate_ray(glam::Vec2::new(1.5, 1.0));
         assert!(grid.list(&ray).is_none());
         let none = vec![shape(Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false })];
-        assert!(CameraGrid::build_any(&Accel::build(&none), &cam).is_none());
+        assert!(CameraGrid::build_any(&Accel::build(&none), &cam, false).is_none());
         // A room of 12 triangles is one node: no grid.
         let room = vec![shape(Geometry::Mesh(cube_mesh(&Mat4::IDENTITY, true)))];
-        assert!(CameraGrid::build(&Accel::build(&room), &cam).is_none());
-        assert!(CameraGrid::build_any(&Accel::build(&room), &cam).is_some());
+        assert!(CameraGrid::build(&Accel::build(&room), &cam, true).is_none());
+        assert!(CameraGrid::build_any(&Accel::build(&room), &cam, true).is_some());
     }
 }
