@@ -74,7 +74,8 @@ pub struct Scene {
     pub(crate) emitter_tables: EmitterTables,
     accel: Accel,
     /// The film grid of leaf lists that answers camera rays ([`Self::intersect_camera`]), built
-    /// on the first camera ray. It answers any ray from its pinhole correctly, so a camera
+    /// before a render's first pass ([`Self::prepare_camera_grid`]) or else on the first camera
+    /// ray. It answers any ray from its pinhole correctly, so a camera
     /// changed after it was built makes it useless to other rays, never wrong.
     camera_grid: OnceLock<Option<CameraGrid>>,
     /// Every shape stops shadow rays ([`Shape::blocks_shadow_rays`]: no `null` or thin
@@ -235,11 +236,6 @@ impl Scene {
         // On one thread when called from a pool thread (see `CameraGrid::build`).
         let parallel = rayon::current_thread_index().is_none();
         self.camera_grid.get_or_init(|| CameraGrid::build(&self.accel, &self.camera, parallel));
-    }
-
-    /// The camera grid's cells, cells left to the tree, and list entries, once it is built.
-    pub fn camera_grid_counts(&self) -> Option<(usize, usize, usize)> {
-        self.camera_grid.get().and_then(|g| g.as_ref()).map(CameraGrid::counts)
     }
 
     /// The surface interaction of a hit from [`Self::intersect_preliminary`].

@@ -549,6 +549,8 @@ impl Accel {
 
     #[inline(always)]
     fn intersect_with<K: NodeTest>(&self, kernel: K, ray: &Ray) -> Option<PreliminaryHit> {
+        // The closest hit so far and its distance, in the real parametrisation; the traversal
+        // only sees the shifted distances, for pruning.
         let mut t_max = ray.t_max;
         let mut best: Option<PreliminaryHit> = None;
         if let Some(bvh) = &self.bvh {
@@ -557,9 +559,6 @@ impl Accel {
             // Prepared on the first triangle test: most connection and shadow rays in media
             // test no triangle at all, only node boxes.
             let mut wt: Option<WatertightRay> = None;
-            // The closest hit so far, kept here in the real parametrisation; the traversal only
-            // sees the shifted distances, for pruning.
-            let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
             self.traverse::<true, K>(
                 kernel,
                 &bvh.closest,
@@ -569,23 +568,16 @@ impl Accel {
                 #[inline(always)]
                 |index, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
-                    let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
-                    Some(match hits.closest() {
-                        Some(lane) => {
-                            let t = hits.t[lane];
-                            t_max = t;
-                            prefetch(&self.leaf_ids[index as usize]);
-                            let (b1, b2) = hits.barycentrics(lane);
-                            closest = Some((index, lane, t, b1, b2));
-                            shifted(t)
+                    Some(match self.leaf_hit(wt, index, leaf, t_max) {
+                        Some(h) => {
+                            t_max = h.t();
+                            best = Some(h);
+                            shifted(t_max)
                         }
                         None => shifted_max,
                     })
                 },
             );
-            if let Some((leaf, lane, t, b1, b2)) = closest {
-                best = Some(PreliminaryHit(Hit::Triangle { leaf, lane: lane as u32, t, b1, b2 }));
-            }
         }
         self.closest_analytic(ray, t_max, best)
     }
@@ -601,7 +593,7 @@ impl Accel {
         // before the first leaf.
         let mut wt: Option<WatertightRay> = None;
         let mut t_max = ray.t_max;
-        let mut closest: Option<(u32, usize, f32, f32, f32)> = None;
+        let mut best: Option<PreliminaryHit> = None;
         for &(leaf, near) in list {
             // No point of this leaf or the ones after it lies closer than `near` to the pinhole,
             // and the ray's points before `t_max` lie within `from_apex + t_max` of it.
@@ -609,18 +601,23 @@ impl Accel {
                 break;
             }
             let wt = wt.get_or_insert_with(|| WatertightRay::new(ray.o.into(), ray.d.into()));
-            let hits = wt.intersect_packet(&self.leaves[leaf as usize].packet, T_MIN, t_max);
-            if let Some(lane) = hits.closest() {
-                t_max = hits.t[lane];
-                let (b1, b2) = hits.barycentrics(lane);
-                closest = Some((leaf, lane, t_max, b1, b2));
+            if let Some(h) = self.leaf_hit(wt, leaf, &self.leaves[leaf as usize], t_max) {
+                t_max = h.t();
+                best = Some(h);
             }
         }
-        let best = closest.map(|(leaf, lane, t, b1, b2)| {
-            prefetch(&self.leaf_ids[leaf as usize]);
-            PreliminaryHit(Hit::Triangle { leaf, lane: lane as u32, t, b1, b2 })
-        });
         self.closest_analytic(ray, t_max, best)
+    }
+
+    /// The closest hit among the triangles of `leaf` (number `index`) before `t_max`, if any;
+    /// the leaf's ids are prefetched for the surface interaction that often follows.
+    #[inline(always)]
+    fn leaf_hit(&self, wt: &WatertightRay, index: u32, leaf: &Leaf, t_max: f32) -> Option<PreliminaryHit> {
+        let hits = wt.intersect_packet(&leaf.packet, T_MIN, t_max);
+        let lane = hits.closest()?;
+        prefetch(&self.leaf_ids[index as usize]);
+        let (b1, b2) = hits.barycentrics(lane);
+        Some(PreliminaryHit(Hit::Triangle { leaf: index, lane: lane as u32, t: hits.t[lane], b1, b2 }))
     }
 
     /// The closest of `best` (the closest triangle hit, at `t_max`, if any) and the analytic
