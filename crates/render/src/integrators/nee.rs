@@ -230,7 +230,11 @@ pub fn surface_nee(
         return Rgb::ZERO;
     }
     let wo = frame.to_local(es.wi);
-    let f = shape.bsdf.eval(wi, wo, h.uv);
+    // The pdf only where the MIS weight needs it, computed with `f` (shared terms).
+    let (f, bsdf_pdf) = match mis {
+        SurfaceMis::PowerHeuristic if !es.is_delta => shape.bsdf.eval_pdf(wi, wo, h.uv),
+        _ => (shape.bsdf.eval(wi, wo, h.uv), 0.0),
+    };
     if f.is_black() {
         return Rgb::ZERO;
     }
@@ -247,9 +251,7 @@ pub fn surface_nee(
         return Rgb::ZERO;
     }
     let w = match mis {
-        SurfaceMis::PowerHeuristic if !es.is_delta => {
-            haze_core::sampling::power_heuristic(es.pdf, shape.bsdf.pdf(wi, wo, h.uv))
-        }
+        SurfaceMis::PowerHeuristic if !es.is_delta => haze_core::sampling::power_heuristic(es.pdf, bsdf_pdf),
         _ => 1.0,
     };
     f * es.radiance * tr * (w / es.pdf)

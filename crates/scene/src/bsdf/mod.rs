@@ -172,6 +172,18 @@ impl Bsdf {
         }
     }
 
+    /// `(`[`Self::eval`]`, `[`Self::pdf`]`)` of one direction, for next-event estimation
+    /// with MIS, sharing what both compute (half vector, microfacet density, Fresnel terms)
+    /// where the BSDF has such terms. The same values as the two calls.
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+        match self {
+            Bsdf::Plastic(b) => b.eval_pdf(wi, wo, uv),
+            Bsdf::RoughPlastic(b) => b.eval_pdf(wi, wo, uv),
+            Bsdf::TwoSided(b) => twosided::eval_pdf(b, wi, wo, uv),
+            _ => (self.eval(wi, wo, uv), self.pdf(wi, wo, uv)),
+        }
+    }
+
     /// The fraction of light that goes straight through the surface along `-wi` (Mitsuba's
     /// `eval_null_transmission`), for shadow rays: 1 for `null`, the summed transmittance
     /// `1 - R'` for `thindielectric`, 0 for every surface that blocks.
@@ -348,6 +360,44 @@ mod tests {
                 null |= b.sample(wi, s.next_1d(), s.next_2d(), Vec2::ZERO).is_some_and(|x| x.null);
             }
             assert_eq!(b.may_pass_through(), null, "{b:?}");
+        }
+    }
+
+    /// `eval_pdf` shares terms between `eval` and `pdf` (plastic, roughplastic); it must give
+    /// their values bit for bit, on both sides of the surface, for every kind.
+    #[test]
+    fn eval_pdf_is_eval_and_pdf() {
+        use self::microfacet::{Microfacet, MicrofacetType};
+        let tex = || Texture::from(Rgb::new(0.2, 0.7, 0.7));
+        let mut kinds = vec![
+            Bsdf::Null,
+            Bsdf::Diffuse { reflectance: tex() },
+            Bsdf::Dielectric { eta: 1.5 },
+            Bsdf::Plastic(Plastic::new(tex(), 1.49, false)),
+            Bsdf::Plastic(Plastic::new(tex(), 1.49, true)),
+        ];
+        for ty in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
+            for vis in [true, false] {
+                let distr = Microfacet::new(ty, 0.3, vis);
+                kinds.push(Bsdf::RoughPlastic(Box::new(RoughPlastic::new(distr, tex(), 1.49, vis))));
+                kinds.push(Bsdf::RoughDielectric(RoughDielectric { distr, eta: 1.3 }));
+            }
+        }
+        kinds.push(Bsdf::TwoSided(Box::new(kinds[6].clone())));
+        let mut s = Sampler::from_seed(17);
+        let mut dir = || haze_core::sampling::sample_uniform_sphere(s.next_2d());
+        for b in &kinds {
+            let mut nonzero = 0;
+            for _ in 0..2000 {
+                let (wi, wo, uv) = (dir(), dir(), Vec2::new(0.3, 0.6));
+                let (f, pdf) = b.eval_pdf(wi, wo, uv);
+                let (f2, pdf2) = (b.eval(wi, wo, uv), b.pdf(wi, wo, uv));
+                assert_eq!(f.0.map(f32::to_bits), f2.0.map(f32::to_bits), "{b:?} at {wi}, {wo}");
+                assert_eq!(pdf.to_bits(), pdf2.to_bits(), "{b:?} at {wi}, {wo}");
+                nonzero += usize::from(pdf > 0.0);
+            }
+            let smooth = matches!(b, Bsdf::Null | Bsdf::Dielectric { .. });
+            assert_eq!(nonzero == 0, smooth, "{b:?}: {nonzero} of 2000 pairs with a pdf");
         }
     }
 

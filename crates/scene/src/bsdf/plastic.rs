@@ -91,9 +91,7 @@ impl Plastic {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Rgb::ZERO;
         }
-        let (f_i, _, _) = fresnel_dielectric(wi.z, self.eta);
-        let (f_o, _, _) = fresnel_dielectric(wo.z, self.eta);
-        self.diffuse(uv) * (cosine_hemisphere_pdf(wo.z) * (1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta))
+        self.eval_pdf(wi, wo, uv).0
     }
 
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
@@ -102,6 +100,18 @@ impl Plastic {
         }
         let (f_i, _, _) = fresnel_dielectric(wi.z, self.eta);
         cosine_hemisphere_pdf(wo.z) * (1.0 - self.prob_specular(f_i))
+    }
+
+    /// [`Self::eval`] and [`Self::pdf`] with the Fresnel reflectance at `wi` computed once.
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let (f_i, _, _) = fresnel_dielectric(wi.z, self.eta);
+        let (f_o, _, _) = fresnel_dielectric(wo.z, self.eta);
+        let cos_pdf = cosine_hemisphere_pdf(wo.z);
+        let f = self.diffuse(uv) * (cos_pdf * (1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta));
+        (f, cos_pdf * (1.0 - self.prob_specular(f_i)))
     }
 }
 

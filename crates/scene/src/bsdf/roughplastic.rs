@@ -58,7 +58,11 @@ impl RoughPlastic {
     }
 
     fn prob_specular(&self, cos_i: f32) -> f32 {
-        let t_i = self.transmittance(cos_i);
+        self.prob_specular_from(self.transmittance(cos_i))
+    }
+
+    /// [`Self::prob_specular`] given the transmittance `t_i` at `cos_i`.
+    fn prob_specular_from(&self, t_i: f32) -> f32 {
         let s = (1.0 - t_i) * self.specular_sampling_weight;
         let d = t_i * (1.0 - self.specular_sampling_weight);
         s / (s + d)
@@ -74,30 +78,16 @@ impl RoughPlastic {
         } else {
             sample_cosine_hemisphere(u2)
         };
-        let pdf = self.pdf(wi, wo);
+        let (f, pdf) = self.eval_pdf(wi, wo, uv);
         if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
-        Some(BsdfSample::glossy(wo, self.eval(wi, wo, uv) / pdf, pdf))
+        Some(BsdfSample::glossy(wo, f / pdf, pdf))
     }
 
     /// `f |cos wo|`: glossy coating reflection plus the diffuse base seen through it.
     pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
-        let (cos_i, cos_o) = (wi.z, wo.z);
-        if cos_i <= 0.0 || cos_o <= 0.0 {
-            return Rgb::ZERO;
-        }
-        let h = (wi + wo).normalize();
-        let (f, _, _) = fresnel_dielectric(wi.dot(h), self.eta);
-        let specular = f * self.distr.eval(h) * self.distr.g(wi, wo, h) / (4.0 * cos_i);
-        let r = self.diffuse_reflectance.eval(uv);
-        let diff = if self.nonlinear {
-            r.map(|c| c / (1.0 - c * self.internal_reflectance))
-        } else {
-            r / (1.0 - self.internal_reflectance)
-        };
-        let t = self.transmittance(cos_i) * self.transmittance(cos_o);
-        diff * (INV_PI * cos_o * t / (self.eta * self.eta)) + Rgb::splat(specular)
+        self.eval_and::<false>(wi, wo, uv).0
     }
 
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
@@ -105,14 +95,51 @@ impl RoughPlastic {
         if cos_i <= 0.0 || cos_o <= 0.0 {
             return 0.0;
         }
-        let p_spec = self.prob_specular(cos_i);
         let h = (wi + wo).normalize();
+        self.pdf_with(wi, wo, h, self.distr.eval(h), self.distr.smith_g1(wi, h), self.transmittance(cos_i))
+    }
+
+    /// [`Self::eval`] and [`Self::pdf`] at once: the half vector, `D(h)`, the transmittance at
+    /// `cos_i` and, with visible-normal sampling, `G1(wi, h)` computed once for both (the same
+    /// arithmetic as apart, so the same bits).
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+        self.eval_and::<true>(wi, wo, uv)
+    }
+
+    /// `(f |cos wo|, pdf)`, the pdf only `if PDF` (else 0).
+    #[inline(always)]
+    fn eval_and<const PDF: bool>(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+        let (cos_i, cos_o) = (wi.z, wo.z);
+        if cos_i <= 0.0 || cos_o <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let h = (wi + wo).normalize();
+        let d = self.distr.eval(h);
+        let t_i = self.transmittance(cos_i);
+        let (f, _, _) = fresnel_dielectric(wi.dot(h), self.eta);
+        let g1_i = self.distr.smith_g1(wi, h);
+        let specular = f * d * (g1_i * self.distr.smith_g1(wo, h)) / (4.0 * cos_i);
+        let r = self.diffuse_reflectance.eval(uv);
+        let diff = if self.nonlinear {
+            r.map(|c| c / (1.0 - c * self.internal_reflectance))
+        } else {
+            r / (1.0 - self.internal_reflectance)
+        };
+        let t = t_i * self.transmittance(cos_o);
+        let value = diff * (INV_PI * cos_o * t / (self.eta * self.eta)) + Rgb::splat(specular);
+        (value, if PDF { self.pdf_with(wi, wo, h, d, g1_i, t_i) } else { 0.0 })
+    }
+
+    /// The pdf given the half vector `h`, `D(h)`, `G1(wi, h)` and the transmittance `t_i` at
+    /// `cos_i`.
+    fn pdf_with(&self, wi: Vec3, wo: Vec3, h: Vec3, d: f32, g1_i: f32, t_i: f32) -> f32 {
+        let p_spec = self.prob_specular_from(t_i);
         let p_glossy = if self.distr.sample_visible {
-            self.distr.eval(h) * self.distr.smith_g1(wi, h) / (4.0 * cos_i)
+            d * g1_i / (4.0 * wi.z)
         } else {
             self.distr.pdf(wi, h) / (4.0 * wo.dot(h))
         };
-        p_spec * p_glossy + (1.0 - p_spec) * cosine_hemisphere_pdf(cos_o)
+        p_spec * p_glossy + (1.0 - p_spec) * cosine_hemisphere_pdf(wo.z)
     }
 }
 

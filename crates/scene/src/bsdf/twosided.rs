@@ -30,6 +30,14 @@ pub(super) fn eval(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
     }
 }
 
+pub(super) fn eval_pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    if wi.z >= 0.0 {
+        b.eval_pdf(wi, wo, uv)
+    } else {
+        b.eval_pdf(flip_z(wi), flip_z(wo), uv)
+    }
+}
+
 pub(super) fn pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
     if wi.z >= 0.0 {
         b.pdf(wi, wo, uv)
