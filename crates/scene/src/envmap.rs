@@ -37,19 +37,15 @@ pub struct EnvMap {
     /// cumulative weights, a cache miss per step on large maps).
     rows: Alias,
     /// The `width x (height - 1)` cells, row-major: per row, the alias table of its cells by
-    /// weight, and beside each slot its cell's `pdf_uv`, so that a sample that keeps its slot
-    /// reads one cache line for both (and the pdf of an escaping ray's cell is one read).
-    cells: Vec<Cell>,
-}
-
-/// One cell of [`EnvMap::cells`]: its slot in its row's alias table and its own pdf.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
-struct Cell {
-    slot: AliasSlot,
-    /// The cell's probability times the number of cells: the density over `(u, v)` in the
-    /// unit square, constant over the cell.
-    pdf_uv: f64,
+    /// weight.
+    cells: Vec<AliasSlot>,
+    /// Per cell row `j`: `sin(theta_j) / 4 * cells / total / (2 pi^2)`, so that the solid-angle
+    /// pdf of a direction with `sin(theta)` in cell `(i, j)` is `row_pdf[j] * (sum of the
+    /// cell's four corner luminances) / sin(theta)` (`pdf_uv / (2 pi^2 sin(theta))` with
+    /// `pdf_uv` the cell's weight over the mean weight). The four corners are the pixels the
+    /// bilinear lookup of the same point reads, so the pdf needs no table of its own: one cache
+    /// line fewer per lookup, and 8 bytes per cell instead of 16.
+    row_pdf: Vec<f32>,
 }
 
 /// Walker's alias table (Vose's construction, "A linear algorithm for generating random
@@ -163,22 +159,18 @@ impl EnvMap {
         }
         let rows = height - 1;
         let lum = |x: usize, y: usize| pixels[y * width + x % width].luminance().max(0.0) as f64;
-        // Per row, the cumulative weights of its cells (`width + 1` entries each), and of the
-        // rows: a cell's weight is the difference of two neighbours, as the pdf always took it.
-        let mut conditional = Vec::with_capacity(rows * (width + 1));
+        // Per row, the alias table of its cells' weights, and the rows' cumulative weights.
         let mut marginal = Vec::with_capacity(rows + 1);
         let mut slots = Vec::with_capacity(rows * width);
         marginal.push(0.0);
         for j in 0..rows {
             let sin_theta = (PI as f64 * (j as f64 + 0.5) / rows as f64).sin();
             let mut acc = 0.0;
-            conditional.push(0.0);
             let weights: Vec<f64> = (0..width)
                 .map(|i| 0.25 * (lum(i, j) + lum(i + 1, j) + lum(i, j + 1) + lum(i + 1, j + 1)) * sin_theta)
                 .collect();
             for w in &weights {
                 acc += w;
-                conditional.push(acc);
             }
             slots.extend(Alias::new(&weights).slots);
             marginal.push(marginal[j] + acc);
@@ -186,13 +178,15 @@ impl EnvMap {
         let row_weights: Vec<f64> = marginal.windows(2).map(|m| m[1] - m[0]).collect();
         let total = marginal[rows];
         let count = (width * rows) as f64;
-        let cells = slots
-            .iter()
-            .enumerate()
-            .map(|(c, &slot)| {
-                let (j, i) = (c / width, c % width);
-                let row = &conditional[j * (width + 1)..(j + 1) * (width + 1)];
-                Cell { slot, pdf_uv: (row[i + 1] - row[i]) / total * count }
+        let row_pdf = (0..rows)
+            .map(|j| {
+                let sin_theta = (PI as f64 * (j as f64 + 0.5) / rows as f64).sin();
+                let f = 0.25 * sin_theta * count / (total * 2.0 * (PI as f64).powi(2));
+                if f.is_finite() {
+                    f as f32
+                } else {
+                    0.0
+                }
             })
             .collect();
         Ok(EnvMap {
@@ -203,7 +197,8 @@ impl EnvMap {
             to_local: to_world.inverse(),
             total,
             rows: Alias::new(&row_weights),
-            cells,
+            cells: slots,
+            row_pdf,
         })
     }
 
@@ -267,14 +262,41 @@ impl EnvMap {
 
     /// The bilinear lookup at texel coordinates `(x, y)` ([`Self::texel`]).
     fn bilinear(&self, x: f32, y: f32) -> Rgb {
+        self.bilinear_pdf::<false>(x, y, 0.0).0
+    }
+
+    /// The bilinear lookup at texel coordinates `(x, y)` and, `if PDF`, the solid-angle pdf of
+    /// a direction there with `sin(theta)` (else 0): both from the cell's four corner pixels
+    /// ([`Self::row_pdf`]).
+    #[inline(always)]
+    fn bilinear_pdf<const PDF: bool>(&self, x: f32, y: f32, sin_theta: f32) -> (Rgb, f32) {
         let (i, j) = self.cell(x, y);
-        let (fx, fy) = (x - i as f32, y - j as f32);
+        self.cell_lookup::<PDF>(i, j, x - i as f32, y - j as f32, sin_theta)
+    }
+
+    /// [`Self::bilinear_pdf`] at the point `(fx, fy)` of cell `(i, j)`.
+    #[inline(always)]
+    fn cell_lookup<const PDF: bool>(
+        &self,
+        i: usize,
+        j: usize,
+        fx: f32,
+        fy: f32,
+        sin_theta: f32,
+    ) -> (Rgb, f32) {
         // `i < width` (`cell`); the right neighbour wraps around (no `%`: an integer division).
         let i1 = if i + 1 == self.width { 0 } else { i + 1 };
         let px = |i: usize, j: usize| self.pixels[j * self.width + i];
-        let top = px(i, j) * (1.0 - fx) + px(i1, j) * fx;
-        let bottom = px(i, j + 1) * (1.0 - fx) + px(i1, j + 1) * fx;
-        top * (1.0 - fy) + bottom * fy
+        let (p00, p10, p01, p11) = (px(i, j), px(i1, j), px(i, j + 1), px(i1, j + 1));
+        let top = p00 * (1.0 - fx) + p10 * fx;
+        let bottom = p01 * (1.0 - fx) + p11 * fx;
+        let pdf = if PDF && sin_theta > 0.0 {
+            let lum = |p: Rgb| p.luminance().max(0.0);
+            (lum(p00) + lum(p10) + lum(p01) + lum(p11)) * self.row_pdf[j] / sin_theta
+        } else {
+            0.0
+        };
+        (top * (1.0 - fy) + bottom * fy, pdf)
     }
 
     /// Solid-angle pdf with which [`Self::sample`] returns the unit world direction `d`.
@@ -287,17 +309,7 @@ impl EnvMap {
     pub fn eval_pdf(&self, d: Vec3) -> (Rgb, f32) {
         let (u, v, sin_theta) = self.uv(d);
         let (x, y) = self.texel(u, v);
-        (self.bilinear(x, y), self.texel_pdf(x, y, sin_theta))
-    }
-
-    /// The solid-angle pdf at texel coordinates `(x, y)` of a direction with `sin(theta)`.
-    fn texel_pdf(&self, x: f32, y: f32, sin_theta: f32) -> f32 {
-        if self.total <= 0.0 || sin_theta <= 0.0 {
-            return 0.0;
-        }
-        let (i, j) = self.cell(x, y);
-        let pdf_uv = self.cells[j * self.width + i].pdf_uv;
-        (pdf_uv / (2.0 * (PI as f64).powi(2) * sin_theta as f64)) as f32
+        self.bilinear_pdf::<true>(x, y, sin_theta)
     }
 
     /// Samples a direction with probability proportional to luminance (see the module
@@ -316,9 +328,10 @@ impl EnvMap {
         }
         let (j, fy) = self.rows.sample(u.y as f64);
         let row = &self.cells[j * self.width..(j + 1) * self.width];
-        let (i, fx) = pick(self.width, u.x as f64, |k| row[k].slot);
-        let x = i as f32 + fx as f32;
-        let y = j as f32 + fy as f32;
+        let (i, fx) = pick(self.width, u.x as f64, |k| row[k]);
+        let (fx, fy) = (fx as f32, fy as f32);
+        let x = i as f32 + fx;
+        let y = j as f32 + fy;
         // Back from texel to (u, v): pixel i sits at u = (i + 1/2) / W.
         let tu = (x + 0.5) / self.width as f32;
         let v = y / (self.height - 1) as f32;
@@ -333,10 +346,11 @@ impl EnvMap {
         if !accept(d) {
             return None;
         }
-        let pdf = (row[i].pdf_uv / (2.0 * (PI as f64).powi(2) * sin_t as f64)) as f32;
-        // The radiance at the sampled texel point itself: `eval(d)` would map `d` back to it
-        // through `atan2` and `acos` (the same point up to rounding).
-        (pdf > 0.0).then(|| EnvMapSample { d, radiance: self.bilinear(self.wrap(x), y), pdf })
+        // The radiance and pdf at the sampled point of cell `(i, j)` itself: `eval_pdf(d)`
+        // would map `d` back to it through `atan2` and `acos` (the same point up to rounding),
+        // and `x` or `y` rounded up to the next integer would name the next cell.
+        let (radiance, pdf) = self.cell_lookup::<true>(i, j, fx, fy, sin_t);
+        (pdf > 0.0).then_some(EnvMapSample { d, radiance, pdf })
     }
 
     /// Prefetches what [`Self::sample_if`] with the same `u` reads after the row's table (which
