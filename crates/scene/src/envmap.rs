@@ -354,10 +354,10 @@ impl EnvMap {
     }
 
     /// Prefetches what [`Self::sample_if`] with the same `u` reads after the row's table (which
-    /// stays cached: `height - 1` slots): the cell slot `u.x` falls on with its pdf, and the
-    /// four pixels around that cell. When the slot keeps itself (its `q`), the sample then finds
-    /// everything in cache; when it goes to its alias, that cell's lines are still fetched
-    /// then. A caller that knows the random numbers of a coming sample calls this before other
+    /// stays cached: `height - 1` slots): the cell slot `u.x` falls on, and the four pixels
+    /// around that cell (which give its radiance and pdf). When the slot keeps itself (its
+    /// `q`), the sample then finds everything in cache; when it goes to its alias, that cell's
+    /// lines are still fetched then. A caller that knows the random numbers of a coming sample calls this before other
     /// work (a ray traversal), so that the cache misses overlap it instead of stalling the
     /// sample (volpath's next-event estimation: docs/performance.md, "issue 17, seventh part").
     #[inline]
