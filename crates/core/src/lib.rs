@@ -10,6 +10,7 @@
 //!   per unit area (points on surfaces).
 
 pub mod color;
+pub mod fastmath;
 pub mod frame;
 pub mod phase;
 pub mod ray;

@@ -8,8 +8,8 @@ use glam::{Vec2, Vec3};
 pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
     let z = 1.0 - 2.0 * u.x;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (sin_p, cos_p) = crate::fastmath::sin_cos(2.0 * PI * u.y);
+    Vec3::new(r * cos_p, r * sin_p, z)
 }
 
 pub const fn uniform_sphere_pdf() -> f32 {
@@ -38,7 +38,8 @@ pub fn sample_uniform_disk_concentric(u: Vec2) -> Vec2 {
     } else {
         (o.y, PI / 2.0 - PI / 4.0 * (o.x / o.y))
     };
-    Vec2::new(r * theta.cos(), r * theta.sin())
+    let (sin_t, cos_t) = crate::fastmath::sin_cos(theta);
+    Vec2::new(r * cos_t, r * sin_t)
 }
 
 /// Uniform direction inside the cone around `+z` with `cos(theta) >= cos_max`.
@@ -46,8 +47,8 @@ pub fn sample_uniform_disk_concentric(u: Vec2) -> Vec2 {
 pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     let cos_t = (1.0 - u.x) + u.x * cos_max;
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+    let (sin_p, cos_p) = crate::fastmath::sin_cos(2.0 * PI * u.y);
+    Vec3::new(sin_t * cos_p, sin_t * sin_p, cos_t)
 }
 
 pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
