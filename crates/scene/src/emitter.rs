@@ -73,6 +73,12 @@ impl Emitter {
 }
 
 impl Emitter {
+    /// True for emitters that no ray can hit by chance (`point`, `spot`): next-event estimation
+    /// is the only way to their light, so no MIS weight involves them.
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Emitter::Point { .. } | Emitter::Spot { .. })
+    }
+
     /// True for emitters at infinity (`constant`, `envmap`).
     pub fn is_environment(&self) -> bool {
         matches!(self, Emitter::Constant { .. } | Emitter::EnvMap(_))

@@ -83,6 +83,8 @@ pub struct Scene {
     every_surface_blocks: bool,
     /// Every emitter is at infinity (environment maps and constant environments).
     every_emitter_at_infinity: bool,
+    /// Every emitter is a delta light ([`Emitter::is_delta`]; true without emitters).
+    every_emitter_delta: bool,
     /// Per shape: the sign that turns its hits' geometric normals outwards when the shape is
     /// sealed ([`sealed_shapes`]), 0 when it is not.
     sealed: Vec<f32>,
@@ -150,6 +152,7 @@ impl Scene {
         let emitter_tables = EmitterTables::new(&emitters, &shapes);
         let every_surface_blocks = shapes.iter().all(Shape::blocks_shadow_rays);
         let every_emitter_at_infinity = emitters.iter().all(Emitter::is_environment);
+        let every_emitter_delta = emitters.iter().all(Emitter::is_delta);
         let sealed = sealed_shapes(&shapes, &emitters);
         let sealed_media = sealed_media(&shapes, &sealed, media.len(), camera.medium);
         Scene {
@@ -165,6 +168,7 @@ impl Scene {
             camera_grid: OnceLock::new(),
             every_surface_blocks,
             every_emitter_at_infinity,
+            every_emitter_delta,
             sealed,
             sealed_media,
         }
@@ -203,6 +207,13 @@ impl Scene {
     pub fn medium_unlit(&self, medium: Option<MediumId>) -> bool {
         medium.is_some_and(|m| self.sealed_media[m as usize])
             || self.every_emitter_at_infinity && self.infinity_unreachable_from(medium)
+    }
+
+    /// True when a path can find emitted light only by next-event estimation (every emitter
+    /// is a point or spot light): a BSDF sample's pdf, which weighs hits of emitters against
+    /// next-event estimation, is then never needed ([`crate::bsdf::Bsdf::sample_with`]).
+    pub fn bsdf_pdfs_unused(&self) -> bool {
+        self.every_emitter_delta
     }
 
     /// Closest hit with `t` in `(0, ray.t_max)`.

@@ -256,7 +256,12 @@ impl Integrator for VolPath {
                 out.add(Component::Surface, beta * direct / r.mean());
             }
 
-            let Some(bs) = shape.bsdf.sample(wi, sampler.next_1d(), sampler.next_2d(), h.uv) else { break };
+            // With delta lights only, `bs.pdf` (`last_pdf`) weighs nothing: not computed.
+            let with_pdf = !scene.bsdf_pdfs_unused();
+            let Some(bs) = shape.bsdf.sample_with(wi, sampler.next_1d(), sampler.next_2d(), h.uv, with_pdf)
+            else {
+                break;
+            };
             beta *= bs.weight;
             eta *= bs.eta;
             let d = frame.to_world(bs.wo);

@@ -111,7 +111,13 @@ impl Microfacet {
     /// stretch `wi` by `alpha`, sample the slopes of the unit-roughness distribution seen from
     /// it, rotate, unstretch.
     pub fn sample(&self, wi: Vec3, u: Vec2) -> (Vec3, f32) {
-        let m = if self.sample_visible {
+        let m = self.sample_normal(wi, u);
+        (m, self.pdf(wi, m))
+    }
+
+    /// The normal of [`Self::sample`] without its pdf.
+    pub fn sample_normal(&self, wi: Vec3, u: Vec2) -> Vec3 {
+        if self.sample_visible {
             let wi_p = Vec3::new(self.alpha * wi.x, self.alpha * wi.y, wi.z).normalize();
             let sin_theta = (1.0 - wi_p.z * wi_p.z).max(0.0).sqrt();
             let (sin_phi, cos_phi) = if sin_theta > 0.0 {
@@ -132,8 +138,7 @@ impl Microfacet {
             let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
             let phi = 2.0 * PI * u.y;
             Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
-        };
-        (m, self.pdf(wi, m))
+        }
     }
 
     /// Slopes of the visible normals of the unit-roughness distribution seen from a direction

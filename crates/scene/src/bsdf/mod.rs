@@ -120,6 +120,16 @@ impl Bsdf {
     /// surface towards the previous vertex) at surface coordinates `uv`. `u1` picks the lobe,
     /// `u2` the direction within it.
     pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+        self.sample_with(wi, u1, u2, uv, true)
+    }
+
+    /// [`Self::sample`]; with `with_pdf` false the caller promises not to read the sample's
+    /// `pdf` (a path tracer whose emitters are all delta lights: no MIS weight ever uses it),
+    /// and a rough dielectric sampling visible normals skips the microfacet density (an `exp`
+    /// and a masking term) and reports `pdf` 0. Direction and weight are the same either way,
+    /// except that a normal whose density underflows (`D(m) cos(m) <= 1e-20`) is rejected only
+    /// when the pdf is computed.
+    pub fn sample_with(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
         match self {
             Bsdf::Null => Some(BsdfSample { null: true, ..BsdfSample::specular(-wi, Rgb::ONE, 1.0, true) }),
             Bsdf::Diffuse { reflectance } => {
@@ -132,10 +142,10 @@ impl Bsdf {
             }
             Bsdf::Dielectric { eta } => Some(dielectric::sample(*eta, wi, u1)),
             Bsdf::ThinDielectric { eta } => Some(thindielectric::sample(*eta, wi, u1)),
-            Bsdf::RoughDielectric(b) => b.sample(wi, u1, u2),
+            Bsdf::RoughDielectric(b) => b.sample(wi, u1, u2, with_pdf),
             Bsdf::Plastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::RoughPlastic(b) => b.sample(wi, u1, u2, uv),
-            Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv),
+            Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv, with_pdf),
         }
     }
 
@@ -398,6 +408,49 @@ mod tests {
             }
             let smooth = matches!(b, Bsdf::Null | Bsdf::Dielectric { .. });
             assert_eq!(nonzero == 0, smooth, "{b:?}: {nonzero} of 2000 pairs with a pdf");
+        }
+    }
+
+    /// Without the pdf a sample keeps its direction, weight and flags (rough dielectrics with
+    /// visible normals report pdf 0; every other kind computes it anyway).
+    #[test]
+    fn samples_without_pdf_keep_direction_and_weight() {
+        use self::microfacet::{Microfacet, MicrofacetType};
+        let mut kinds =
+            vec![Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() }, Bsdf::Dielectric { eta: 1.5 }];
+        for ty in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
+            for vis in [true, false] {
+                let rough =
+                    Bsdf::RoughDielectric(RoughDielectric { distr: Microfacet::new(ty, 0.3, vis), eta: 1.3 });
+                kinds.push(Bsdf::TwoSided(Box::new(rough.clone())));
+                kinds.push(rough);
+            }
+        }
+        let mut s = Sampler::from_seed(23);
+        for b in &kinds {
+            let skips = match b {
+                Bsdf::RoughDielectric(r) => r.distr.sample_visible,
+                Bsdf::TwoSided(inner) => {
+                    matches!(&**inner, Bsdf::RoughDielectric(r) if r.distr.sample_visible)
+                }
+                _ => false,
+            };
+            let mut n = 0;
+            for _ in 0..3000 {
+                let wi = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+                let (u1, u2) = (s.next_1d(), s.next_2d());
+                let (a, b2) =
+                    (b.sample(wi, u1, u2, Vec2::ZERO), b.sample_with(wi, u1, u2, Vec2::ZERO, false));
+                let (Some(a), Some(c)) = (a, b2) else {
+                    assert_eq!(a.is_some(), b2.is_some(), "{b:?} at {wi}");
+                    continue;
+                };
+                n += 1;
+                assert_eq!((a.wo, a.weight, a.specular, a.eta), (c.wo, c.weight, c.specular, c.eta), "{b:?}");
+                assert_eq!((a.transmitted, a.null), (c.transmitted, c.null));
+                assert_eq!(c.pdf, if skips { 0.0 } else { a.pdf }, "{b:?}");
+            }
+            assert!(n > 1000, "{b:?}: {n} samples");
         }
     }
 

@@ -44,12 +44,18 @@ impl RoughDielectric {
         (mulsign(m, m.z), eta, reflect)
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+    /// `with_pdf`: see [`super::Bsdf::sample_with`] (the pdf is skipped only with visible-normal
+    /// sampling, whose weight does not need it).
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, with_pdf: bool) -> Option<BsdfSample> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;
         }
-        let (m, m_pdf) = self.sample_distr(cos_i).sample(mulsign(wi, cos_i), u2);
+        let with_pdf = with_pdf || !self.distr.sample_visible;
+        let distr = self.sample_distr(cos_i);
+        let wi_s = mulsign(wi, cos_i);
+        let m = distr.sample_normal(wi_s, u2);
+        let m_pdf = if with_pdf { distr.pdf(wi_s, m) } else { 1.0 };
         if m_pdf.is_nan() || m_pdf <= 0.0 {
             return None;
         }
@@ -97,7 +103,7 @@ impl RoughDielectric {
         Some(BsdfSample {
             wo,
             weight: Rgb::splat(weight),
-            pdf,
+            pdf: if with_pdf { pdf } else { 0.0 },
             specular: false,
             eta: eta_it,
             transmitted: !reflected,

@@ -14,11 +14,11 @@ fn flip_z(v: Vec3) -> Vec3 {
     Vec3::new(v.x, v.y, -v.z)
 }
 
-pub(super) fn sample(b: &Bsdf, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+pub(super) fn sample(b: &Bsdf, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
     if wi.z >= 0.0 {
-        return b.sample(wi, u1, u2, uv);
+        return b.sample_with(wi, u1, u2, uv, with_pdf);
     }
-    let s = b.sample(flip_z(wi), u1, u2, uv)?;
+    let s = b.sample_with(flip_z(wi), u1, u2, uv, with_pdf)?;
     Some(BsdfSample { wo: flip_z(s.wo), ..s })
 }
 
