@@ -91,7 +91,7 @@ impl Plastic {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Rgb::ZERO;
         }
-        self.eval_pdf(wi, wo, uv).0
+        self.eval_and::<false>(wi, wo, uv).0
     }
 
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
@@ -104,6 +104,12 @@ impl Plastic {
 
     /// [`Self::eval`] and [`Self::pdf`] with the Fresnel reflectance at `wi` computed once.
     pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+        self.eval_and::<true>(wi, wo, uv)
+    }
+
+    /// `(f |cos wo|, pdf)`, the pdf only `if PDF` (else 0: `eval` alone pays no division for it).
+    #[inline(always)]
+    fn eval_and<const PDF: bool>(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Rgb::ZERO, 0.0);
         }
@@ -111,7 +117,7 @@ impl Plastic {
         let (f_o, _, _) = fresnel_dielectric(wo.z, self.eta);
         let cos_pdf = cosine_hemisphere_pdf(wo.z);
         let f = self.diffuse(uv) * (cos_pdf * (1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta));
-        (f, cos_pdf * (1.0 - self.prob_specular(f_i)))
+        (f, if PDF { cos_pdf * (1.0 - self.prob_specular(f_i)) } else { 0.0 })
     }
 }
 

@@ -96,7 +96,9 @@ impl RoughPlastic {
             return 0.0;
         }
         let h = (wi + wo).normalize();
-        self.pdf_with(wi, wo, h, self.distr.eval(h), self.distr.smith_g1(wi, h), self.transmittance(cos_i))
+        // `G1(wi, h)` enters only the visible-normal pdf.
+        let g1_i = if self.distr.sample_visible { self.distr.smith_g1(wi, h) } else { 0.0 };
+        self.pdf_with(wi, wo, h, self.distr.eval(h), g1_i, self.transmittance(cos_i))
     }
 
     /// [`Self::eval`] and [`Self::pdf`] at once: the half vector, `D(h)`, the transmittance at
