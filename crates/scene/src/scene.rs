@@ -1,13 +1,14 @@
 //! The scene the integrators render: camera, shapes, media, emitters, integrator settings, and
 //! ray queries through the acceleration structure.
 
-use crate::accel::{Accel, CameraGrid, PreliminaryHit, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
+use crate::accel::{Accel, CameraGrid, Leaving, PreliminaryHit, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::emitter_tables::EmitterTables;
 use crate::interaction::SurfaceInteraction;
 use crate::medium::{Medium, MediumId};
-use crate::shape::{closed, Shape};
+use crate::shape::convex::{self, ClearSides};
+use crate::shape::{closed, Geometry, Shape};
 use glam::Vec3;
 use haze_core::Ray;
 use std::path::PathBuf;
@@ -90,6 +91,9 @@ pub struct Scene {
     sealed: Vec<f32>,
     /// Per medium: it is sealed ([`sealed_media`]).
     sealed_media: Vec<bool>,
+    /// Per shape: the sides of its faces from which it cannot be hit again
+    /// ([`convex::clear_sides`]; none for analytic shapes, which the BVH does not hold).
+    clear: Vec<ClearSides>,
 }
 
 /// [`Scene::sealed`]: a shape is sealed when it is a closed surface
@@ -155,6 +159,13 @@ impl Scene {
         let every_emitter_delta = emitters.iter().all(Emitter::is_delta);
         let sealed = sealed_shapes(&shapes, &emitters);
         let sealed_media = sealed_media(&shapes, &sealed, media.len(), camera.medium);
+        let clear = shapes
+            .iter()
+            .map(|s| match &s.geometry {
+                Geometry::Mesh(m) => convex::clear_sides(m),
+                _ => ClearSides::default(),
+            })
+            .collect();
         Scene {
             emitter_tables,
             path,
@@ -171,6 +182,24 @@ impl Scene {
             every_emitter_delta,
             sealed,
             sealed_media,
+            clear,
+        }
+    }
+
+    /// What a ray leaving shape `shape` at a hit with geometric normal `n` in direction `d` (its
+    /// origin offset to that side, `haze_core::ray::offset_origin`) cannot hit: the shape itself
+    /// when it is clear on that side ([`convex::clear_sides`]: a convex mesh left outwards, a
+    /// flat one left either way) and `d` is at least [`convex::MIN_COSINE`] off the face's
+    /// plane, else nothing. For [`Self::intersect_preliminary_leaving`] and
+    /// [`Self::shadow_hits_leaving`].
+    #[inline]
+    pub fn leaving(&self, shape: u32, n: Vec3, d: Vec3) -> Leaving {
+        let c = self.clear[shape as usize];
+        let cos = n.dot(d);
+        if c.front && cos >= convex::MIN_COSINE || c.back && cos <= -convex::MIN_COSINE {
+            Leaving::shape(shape)
+        } else {
+            Leaving::NONE
         }
     }
 
@@ -227,6 +256,12 @@ impl Scene {
         self.accel.intersect_preliminary(ray)
     }
 
+    /// [`Self::intersect_preliminary`] for a ray that cannot hit what `leaving` names
+    /// ([`Self::leaving`]): the same answer, the BVH skipping that shape.
+    pub fn intersect_preliminary_leaving(&self, ray: &Ray, leaving: Leaving) -> Option<PreliminaryHit> {
+        self.accel.intersect_preliminary_leaving(ray, leaving)
+    }
+
     /// [`Self::intersect_preliminary`] for a ray the camera generated (its line through the
     /// pinhole): the same answer, from the camera grid ([`CameraGrid`], built on the first
     /// call) instead of the tree. Any other ray is answered by the tree.
@@ -264,6 +299,16 @@ impl Scene {
     /// (unordered; see `Accel::shadow_hits`).
     pub fn shadow_hits(&self, ray: &Ray, hits: &mut [ShadowHit; MAX_SHADOW_HITS]) -> ShadowQuery {
         self.accel.shadow_hits(&self.shapes, ray, hits)
+    }
+
+    /// [`Self::shadow_hits`] for a ray that cannot hit what `leaving` names ([`Self::leaving`]).
+    pub fn shadow_hits_leaving(
+        &self,
+        ray: &Ray,
+        leaving: Leaving,
+        hits: &mut [ShadowHit; MAX_SHADOW_HITS],
+    ) -> ShadowQuery {
+        self.accel.shadow_hits_leaving(&self.shapes, ray, leaving, hits)
     }
 
     /// The surface interaction of a hit from [`Self::shadow_hits`].

@@ -4,7 +4,7 @@ use glam::{Vec2, Vec3};
 use haze_core::ray::offset_origin;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
-use haze_scene::accel::{ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
+use haze_scene::accel::{Leaving, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use haze_scene::{Bsdf, MediumId, Scene};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
@@ -46,7 +46,7 @@ pub fn transmittance_to(
     dist: f32,
     medium: Option<MediumId>,
 ) -> Rgb {
-    transmittance_impl(scene, p, n_start, d, dist, medium, None)
+    transmittance_impl(scene, p, n_start.map(|n| (u32::MAX, n)), d, dist, medium, None)
 }
 
 /// [`transmittance_to`] with the ratio-tracking estimates of heterogeneous segments
@@ -61,7 +61,24 @@ pub fn transmittance_to_sampled(
     medium: Option<MediumId>,
     sampler: &mut Sampler,
 ) -> Rgb {
-    transmittance_impl(scene, p, n_start, d, dist, medium, Some(sampler))
+    transmittance_impl(scene, p, n_start.map(|n| (u32::MAX, n)), d, dist, medium, Some(sampler))
+}
+
+/// [`transmittance_to_sampled`] from a point `p` on shape `shape` with geometric normal `n`:
+/// the same value, the shadow ray's traversal skipping the shape where it cannot be hit again
+/// ([`Scene::leaving`]: a convex mesh left outwards, a flat one).
+#[allow(clippy::too_many_arguments)]
+pub fn transmittance_from_surface_sampled(
+    scene: &Scene,
+    shape: u32,
+    p: Vec3,
+    n: Vec3,
+    d: Vec3,
+    dist: f32,
+    medium: Option<MediumId>,
+    sampler: &mut Sampler,
+) -> Rgb {
+    transmittance_impl(scene, p, Some((shape, n)), d, dist, medium, Some(sampler))
 }
 
 /// Ratio tracking over `[t0, t1]` of `ray` in heterogeneous medium `m`, from `sampler` or,
@@ -91,10 +108,12 @@ fn hetero_segment(
 }
 
 #[allow(clippy::too_many_arguments)]
+/// `start`: the shape (`u32::MAX` when not known) and geometric normal at `p` when `p` is on a
+/// surface.
 fn transmittance_impl(
     scene: &Scene,
     p: Vec3,
-    n_start: Option<Vec3>,
+    start: Option<(u32, Vec3)>,
     d: Vec3,
     dist: f32,
     mut medium: Option<MediumId>,
@@ -107,16 +126,21 @@ fn transmittance_impl(
         return Rgb::ZERO;
     }
     let target = dist.is_finite().then(|| p + d * dist);
-    let origin = match n_start {
-        Some(n) => offset_origin(p, n, d),
+    let origin = match start {
+        Some((_, n)) => offset_origin(p, n, d),
         None => p,
     };
     // One traversal for the whole shadow ray: it stops at the first blocker found, else returns
     // the null boundaries and thin dielectrics on the segment, crossed here in `t` order with
     // the optical depth summed over them (one `exp` at the end instead of one per segment).
     let Some(ray) = shadow_ray(origin, target, d) else { return Rgb::ONE };
+    // Decided on the ray as traced (aimed at the target from the offset origin).
+    let leaving = match start {
+        Some((shape, n)) if shape != u32::MAX => scene.leaving(shape, n, ray.d),
+        _ => Leaving::NONE,
+    };
     let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];
-    let n = match scene.shadow_hits(&ray, &mut hits) {
+    let n = match scene.shadow_hits_leaving(&ray, leaving, &mut hits) {
         ShadowQuery::Blocked => return Rgb::ZERO,
         ShadowQuery::Clear(n) => n,
         ShadowQuery::Unsupported => return transmittance_segments(scene, origin, target, d, medium, sampler),
@@ -238,10 +262,11 @@ pub fn surface_nee(
     if f.is_black() {
         return Rgb::ZERO;
     }
-    let tr = transmittance_to_sampled(
+    let tr = transmittance_from_surface_sampled(
         scene,
+        h.shape,
         h.p,
-        Some(h.n),
+        h.n,
         es.wi,
         es.dist,
         shape.medium_towards(es.wi, h.n, medium),

@@ -28,6 +28,7 @@ use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::{free_flight_at, free_flight_distance, hero_channel, FreeFlight};
 use haze_core::{Frame, Ray, Rgb, Sampler};
+use haze_scene::accel::Leaving;
 use haze_scene::hetero::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
 
@@ -84,6 +85,8 @@ impl Integrator for VolPath {
         // The path's first query is usually a camera ray's (the render loop's), which the
         // scene answers from its camera grid; `intersect_camera` checks that it is one.
         let mut first_query = true;
+        // The shape the current ray cannot hit, having left it (`Scene::leaving`).
+        let mut leaving = Leaving::NONE;
 
         loop {
             if depth > self.rr_depth {
@@ -128,7 +131,7 @@ impl Integrator for VolPath {
             let hit = if std::mem::take(&mut first_query) {
                 scene.intersect_camera(&query)
             } else {
-                scene.intersect_preliminary(&query)
+                scene.intersect_preliminary_leaving(&query, leaving)
             };
             let t_surface = hit.map_or(ray.t_max, |h| h.t());
 
@@ -190,6 +193,7 @@ impl Integrator for VolPath {
                         last_p = p;
                         specular_chain = false;
                         ray = Ray::new(p, d);
+                        leaving = Leaving::NONE;
                         continue;
                     }
                     Flight::Pass { weight, ratio } => {
@@ -232,6 +236,7 @@ impl Integrator for VolPath {
 
             let shape = &scene.shapes[h.shape as usize];
             if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
+                leaving = scene.leaving(h.shape, h.n, ray.d);
                 continue;
             }
             if shape.bsdf.is_black() {
@@ -276,6 +281,7 @@ impl Integrator for VolPath {
             }
             medium = medium_towards(d);
             ray = Ray::new(offset_origin(h.p, h.n, d), d);
+            leaving = scene.leaving(h.shape, h.n, d);
         }
         out
     }

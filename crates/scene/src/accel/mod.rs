@@ -104,6 +104,28 @@ pub struct ShadowHit {
     b2: f32,
 }
 
+/// A shape a ray cannot hit, or none: a ray that leaves a face of a mesh whose triangles all lie
+/// behind that face's plane, away from the ray (a convex mesh left outwards, a flat one left on
+/// either side: `Scene::leaving`, `shape/convex.rs`), cannot meet the mesh again. Queries given
+/// one skip every subtree of that shape's triangles without testing its boxes
+/// ([`wide::WideNode::shapes`]); the answer is the same, for fewer node visits and leaf tests.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Leaving(u32);
+
+/// [`Leaving::NONE`]'s id: neither a shape's index nor [`wide::MIXED`].
+const NO_SHAPE: u32 = u32::MAX - 1;
+
+impl Leaving {
+    /// Nothing to skip.
+    pub const NONE: Leaving = Leaving(NO_SHAPE);
+
+    /// The ray cannot hit mesh `shape` (the caller's guarantee).
+    pub fn shape(shape: u32) -> Self {
+        debug_assert!(shape < NO_SHAPE);
+        Leaving(shape)
+    }
+}
+
 /// Most pass-through surfaces [`Accel::shadow_hits`] collects before it gives up.
 pub const MAX_SHADOW_HITS: usize = 8;
 
@@ -390,7 +412,11 @@ impl Accel {
                     Aabb::new(b.min - pad, b.max + pad)
                 })
                 .collect();
-            let wide = WideBvh::new(build_bvh2(&boxes, build_params(flat.len()), &mut Default::default()));
+            let prim_shape: Vec<u32> = refs.iter().map(|t| t.shape).collect();
+            let wide = WideBvh::new(
+                build_bvh2(&boxes, build_params(flat.len()), &mut Default::default()),
+                &prim_shape,
+            );
             let tris: Vec<TriRef> = wide.primitive_indices.iter().map(|&i| refs[i as usize]).collect();
             let leaves = leaf_packets(&wide, &tris, shapes);
             (Some(wide), leaves)
@@ -399,7 +425,8 @@ impl Accel {
     }
 
     /// Front-to-back traversal of the decoded nodes for the traversal ray from `o` along `d`
-    /// (the backed-off origin, see the module documentation) up to `t_max`. `test(leaf, t_max)`
+    /// (the backed-off origin, see the module documentation) up to `t_max`, skipping the subtrees
+    /// of the shape `leaving` names ([`Leaving`]). `test(leaf, t_max)`
     /// tests the triangles of a leaf the ray reaches and returns the new `t_max` in the
     /// traversal's parametrisation (below the old one for a closer hit), or `None` to end the
     /// traversal.
@@ -419,6 +446,7 @@ impl Accel {
         o: Vec3A,
         d: Vec3A,
         t_max: f32,
+        leaving: Leaving,
         test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
         // Uninitialised: zeroing the 512-byte stack cost a `memset` call per query (2.5% of
@@ -436,7 +464,7 @@ impl Accel {
         // (and `Avx2::run`'s closures) are `#[inline(always)]`: compiled into both kernels'
         // copies of the loop, rustc otherwise left them out of line (the binary's symbols),
         // and then out of the AVX2 function.
-        self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, stack, test);
+        self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, leaving.0, stack, test);
     }
 
     #[inline(always)]
@@ -448,6 +476,7 @@ impl Accel {
         o: Vec3A,
         d: Vec3A,
         mut t_max: f32,
+        skip: u32,
         stack: &mut [MaybeUninit<Entry>],
         mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
@@ -471,6 +500,9 @@ impl Accel {
             } else {
                 let node = &wide.nodes[cur as usize];
                 let (mut mask, t_near) = kernel.intersect(node, &ray, t_max);
+                if skip != NO_SHAPE {
+                    mask &= !node.shape_mask(skip);
+                }
                 if mask != 0 {
                     let c = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -544,11 +576,17 @@ impl Accel {
     /// then the interaction is never built (Mitsuba 3 splits its queries the same way,
     /// `PreliminaryIntersection` and `compute_surface_interaction`).
     pub fn intersect_preliminary(&self, ray: &Ray) -> Option<PreliminaryHit> {
-        with_kernel!(self, k => self.intersect_with(k, ray))
+        with_kernel!(self, k => self.intersect_with(k, ray, Leaving::NONE))
+    }
+
+    /// [`Self::intersect_preliminary`] for a ray that cannot hit the shape `leaving` names: the
+    /// same answer, without visiting that shape's subtrees.
+    pub fn intersect_preliminary_leaving(&self, ray: &Ray, leaving: Leaving) -> Option<PreliminaryHit> {
+        with_kernel!(self, k => self.intersect_with(k, ray, leaving))
     }
 
     #[inline(always)]
-    fn intersect_with<K: NodeTest>(&self, kernel: K, ray: &Ray) -> Option<PreliminaryHit> {
+    fn intersect_with<K: NodeTest>(&self, kernel: K, ray: &Ray, leaving: Leaving) -> Option<PreliminaryHit> {
         // The closest hit so far and its distance, in the real parametrisation; the traversal
         // only sees the shifted distances, for pruning.
         let mut t_max = ray.t_max;
@@ -565,6 +603,7 @@ impl Accel {
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(t_max),
+                leaving,
                 #[inline(always)]
                 |index, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
@@ -748,6 +787,7 @@ impl Accel {
                 o - d * ORIGIN_BACKOFF,
                 d,
                 shifted(ray.t_max),
+                Leaving::NONE,
                 #[inline(always)]
                 |_, leaf, shifted_max| {
                     let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
@@ -779,7 +819,19 @@ impl Accel {
         ray: &Ray,
         hits: &mut [ShadowHit; MAX_SHADOW_HITS],
     ) -> ShadowQuery {
-        with_kernel!(self, k => self.shadow_hits_with(k, shapes, ray, hits))
+        self.shadow_hits_leaving(shapes, ray, Leaving::NONE, hits)
+    }
+
+    /// [`Self::shadow_hits`] for a ray that cannot hit the shape `leaving` names: the same
+    /// answer, without visiting that shape's subtrees.
+    pub fn shadow_hits_leaving(
+        &self,
+        shapes: &[Shape],
+        ray: &Ray,
+        leaving: Leaving,
+        hits: &mut [ShadowHit; MAX_SHADOW_HITS],
+    ) -> ShadowQuery {
+        with_kernel!(self, k => self.shadow_hits_with(k, shapes, ray, leaving, hits))
     }
 
     #[inline(always)]
@@ -788,6 +840,7 @@ impl Accel {
         kernel: K,
         shapes: &[Shape],
         ray: &Ray,
+        leaving: Leaving,
         hits: &mut [ShadowHit; MAX_SHADOW_HITS],
     ) -> ShadowQuery {
         for a in &self.analytic {
@@ -820,6 +873,7 @@ impl Accel {
             o - d * ORIGIN_BACKOFF,
             d,
             shifted(ray.t_max),
+            leaving,
             #[inline(always)]
             |index, leaf, shifted_max| {
                 let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
@@ -868,6 +922,7 @@ mod tests {
     use super::*;
     use crate::bsdf::Bsdf;
     use crate::shape::{cube_mesh, TriangleMesh};
+    use glam::Mat4;
     use haze_core::Sampler;
 
     fn shape(geometry: Geometry) -> Shape {
@@ -952,6 +1007,97 @@ mod tests {
                 assert_eq!(*first.get_or_insert_with(|| a.clone()), a, "{k:?}");
             }
         }
+    }
+
+    /// A ray leaving a convex mesh outwards gets the same answers (closest hit, shadow query,
+    /// bit for bit, both kernels) whether or not it names the mesh as [`Leaving`], and in this
+    /// scene (a convex sphere, a cube beside it, a soup of triangles around both) such rays
+    /// never hit the sphere again; a ray that names a mesh it does hit (a misuse) finds none of
+    /// it, so the skip really prunes its subtrees.
+    #[test]
+    fn leaving_a_convex_mesh_skips_it_with_the_same_answers() {
+        use crate::shape::convex::{clear_sides, uv_sphere, MIN_COSINE};
+        let sphere = uv_sphere(24, 1.0);
+        assert!(clear_sides(&sphere).front);
+        let cube = cube_mesh(
+            &Mat4::from_scale_rotation_translation(
+                Vec3::splat(0.4),
+                glam::Quat::IDENTITY,
+                Vec3::new(1.8, 0.2, 0.0),
+            ),
+            false,
+        );
+        let mut s = Sampler::from_seed(21);
+        let mut soup = Vec::new();
+        for _ in 0..300 {
+            let c = (Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5) * 6.0;
+            if c.length() < 1.3 {
+                continue;
+            }
+            let e = |s: &mut Sampler| (Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5) * 0.6;
+            soup.extend([c + e(&mut s), c + e(&mut s), c + e(&mut s)]);
+        }
+        let soup_indices = (0..soup.len() as u32 / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let soup = TriangleMesh::new(soup, None, None, soup_indices, false);
+        let shapes: Vec<Shape> =
+            [sphere.clone(), cube, soup].into_iter().map(|m| shape(Geometry::Mesh(m))).collect();
+        let mut accel = Accel::build(&shapes);
+        let (mut outward, mut others_hit) = (0, 0);
+        for &k in &kernels() {
+            accel.avx2 = k;
+            for i in 0..4000 {
+                // A point on a random triangle of the sphere, and a direction leaving it outwards.
+                let tri = (s.next_1d() * sphere.indices.len() as f32) as usize % sphere.indices.len();
+                let [a, b, c] = sphere.vertices(tri);
+                let (u, v) = (s.next_1d(), s.next_1d());
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                let p = a + (b - a) * u + (c - a) * v;
+                let n = sphere.face_normal(tri);
+                let mut d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
+                if d.dot(n) < 0.0 {
+                    d = -d;
+                }
+                // Some rays exactly along the cube's direction, so that many hit something.
+                if i % 4 == 0 {
+                    d = (Vec3::new(1.8, 0.2, 0.0) - p).normalize();
+                    if d.dot(n) <= 0.0 {
+                        continue;
+                    }
+                }
+                if d.dot(n) < MIN_COSINE {
+                    continue;
+                }
+                outward += 1;
+                let ray = Ray::new(haze_core::ray::offset_origin(p, n, d), d);
+                let plain = accel.intersect_preliminary(&ray).map(|h| accel.interaction(&shapes, &h));
+                assert!(plain.is_none_or(|h| h.shape != 0), "case {i}: the sphere hit itself");
+                others_hit += plain.is_some() as u32;
+                let skipped = accel
+                    .intersect_preliminary_leaving(&ray, Leaving::shape(0))
+                    .map(|h| accel.interaction(&shapes, &h));
+                let key = |h: Option<SurfaceInteraction>| h.map(|h| (h.t.to_bits(), h.shape, h.prim));
+                assert_eq!(key(plain), key(skipped), "case {i}");
+                let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];
+                for t_max in [0.5, 3.0, f32::INFINITY] {
+                    let seg = Ray { t_max, ..ray };
+                    let a = accel.shadow_hits(&shapes, &seg, &mut hits);
+                    let b = accel.shadow_hits_leaving(&shapes, &seg, Leaving::shape(0), &mut hits);
+                    assert_eq!(a, b, "case {i}, t_max {t_max}");
+                }
+            }
+            // Misuse: rays from outside aimed at the sphere, naming it, do not find it.
+            for _ in 0..200 {
+                let o = haze_core::sampling::sample_uniform_sphere(s.next_2d()) * 2.5;
+                let ray = Ray::new(o, -o.normalize());
+                let plain = accel.intersect_preliminary(&ray).map(|h| accel.interaction(&shapes, &h));
+                let skipped = accel
+                    .intersect_preliminary_leaving(&ray, Leaving::shape(0))
+                    .map(|h| accel.interaction(&shapes, &h));
+                assert!(plain.is_some());
+                assert!(skipped.is_none_or(|h| h.shape != 0));
+            }
+        }
+        assert!(outward > 4000 && others_hit > 500, "{outward} outward rays, {others_hit} hit another shape");
     }
 
     /// `shadow_hits` on a scene of `null` meshes finds every triangle the segment crosses (the

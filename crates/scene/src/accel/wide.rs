@@ -65,6 +65,49 @@ pub struct WideNode {
     pub children: [u32; WIDTH],
     /// `planes[p]`: plane `p` of all lanes.
     planes: [Plane; 6],
+    /// The shape every triangle under child slot `c` belongs to, or [`MIXED`] (also for empty
+    /// slots): a query that cannot hit a shape ([`super::Leaving`]) skips the subtrees of that
+    /// shape whole. In what would otherwise be the node's padding (256 bytes either way).
+    pub shapes: [u32; WIDTH],
+}
+
+/// [`WideNode::shapes`] of a subtree with triangles of more than one shape.
+pub const MIXED: u32 = u32::MAX;
+
+/// The shape of each binary node's triangles, or [`MIXED`]: `prim_shape` is each primitive's
+/// shape by its index before the build (what `bvh.primitive_indices` holds).
+fn subtree_shapes(bvh: &Bvh2, prim_shape: &[u32]) -> Vec<u32> {
+    let b2 = &bvh.nodes;
+    let mut shape = vec![MIXED; b2.len()];
+    // Children before their parent (post-order without recursion), whatever obvhs's layout.
+    let mut order = Vec::with_capacity(b2.len());
+    let mut stack = if b2.is_empty() { vec![] } else { vec![0usize] };
+    while let Some(n) = stack.pop() {
+        order.push(n);
+        if !b2[n].is_leaf() {
+            let f = b2[n].first_index as usize;
+            stack.extend([f, f + 1]);
+        }
+    }
+    for &n in order.iter().rev() {
+        shape[n] = if b2[n].is_leaf() {
+            let run = &bvh.primitive_indices[b2[n].first_index as usize..][..b2[n].prim_count as usize];
+            let first = prim_shape[run[0] as usize];
+            if run.iter().all(|&i| prim_shape[i as usize] == first) {
+                first
+            } else {
+                MIXED
+            }
+        } else {
+            let f = b2[n].first_index as usize;
+            if shape[f] == shape[f + 1] {
+                shape[f]
+            } else {
+                MIXED
+            }
+        };
+    }
+    shape
 }
 
 impl WideNode {
@@ -319,10 +362,20 @@ mod avx2 {
 }
 
 impl WideNode {
-    /// `boxes`: the children's boxes (at most [`WIDTH`]) and what each slot holds.
-    fn new(children: &[(Aabb, u32)]) -> Self {
+    /// Bit `c` set when child slot `c`'s subtree is all of shape `skip`.
+    #[inline(always)]
+    pub fn shape_mask(&self, skip: u32) -> u32 {
+        let s = glam::UVec4::splat(skip);
+        let lo = glam::UVec4::from_slice(&self.shapes[..4]).cmpeq(s).bitmask();
+        let hi = glam::UVec4::from_slice(&self.shapes[4..]).cmpeq(s).bitmask();
+        lo | hi << 4
+    }
+
+    /// `boxes`: the children's boxes (at most [`WIDTH`]), what each slot holds and the shape
+    /// of its triangles ([`Self::shapes`]).
+    fn new(children: &[(Aabb, u32, u32)]) -> Self {
         let lane = |c: usize, plane: usize| match children.get(c) {
-            Some((b, _)) => {
+            Some((b, _, _)) => {
                 if plane % 2 == 0 {
                     b.min[plane / 2]
                 } else {
@@ -342,7 +395,11 @@ impl WideNode {
                 )
             }))
         });
-        WideNode { planes, children: std::array::from_fn(|c| children.get(c).map_or(0, |x| x.1)) }
+        WideNode {
+            planes,
+            children: std::array::from_fn(|c| children.get(c).map_or(0, |x| x.1)),
+            shapes: std::array::from_fn(|c| children.get(c).map_or(MIXED, |x| x.2)),
+        }
     }
 }
 
@@ -460,8 +517,9 @@ pub struct WideBvh {
 
 impl WideBvh {
     /// Collapses `bvh` (leaves of at most [`LEAF_SIZE`] primitives) into both [`WIDTH`]-wide
-    /// trees.
-    pub fn new(bvh: Bvh2) -> Self {
+    /// trees; `prim_shape[i]` is the shape of primitive `i` (its index before the build).
+    pub fn new(bvh: Bvh2, prim_shape: &[u32]) -> Self {
+        let shape = subtree_shapes(&bvh, prim_shape);
         let b2 = &bvh.nodes;
         // Leaf numbers in the binary tree's depth-first order, shared by both trees.
         let mut leaf_of = vec![u32::MAX; b2.len()];
@@ -482,8 +540,8 @@ impl WideBvh {
             }
         }
         let plan = CollapsePlan::new(b2);
-        let closest = collapse(b2, &leaf_of, |b, open| plan.children(b2, b, open));
-        let all = collapse(b2, &leaf_of, |b, open| {
+        let closest = collapse(b2, &leaf_of, &shape, |b, open| plan.children(b2, b, open));
+        let all = collapse(b2, &leaf_of, &shape, |b, open| {
             let first = b2[b].first_index as usize;
             open.extend([first, first + 1]);
             // Open the largest inner child until the node is full.
@@ -506,6 +564,7 @@ impl WideBvh {
 fn collapse(
     b2: &[obvhs::bvh2::node::Bvh2Node],
     leaf_of: &[u32],
+    shape: &[u32],
     mut children: impl FnMut(usize, &mut Vec<usize>),
 ) -> WideTree {
     let mut nodes: Vec<WideNode> = Vec::new();
@@ -513,7 +572,7 @@ fn collapse(
         return WideTree { nodes, stack_need: 1 };
     }
     if b2[0].is_leaf() {
-        nodes.push(WideNode::new(&[(b2[0].aabb, leaf_of[0])]));
+        nodes.push(WideNode::new(&[(b2[0].aabb, leaf_of[0], shape[0])]));
         return WideTree { nodes, stack_need: 2 };
     }
     // (binary node, wide node to fill); every wide node is reserved when its parent is made.
@@ -523,7 +582,7 @@ fn collapse(
     while let Some((b, w)) = work.pop() {
         open.clear();
         children(b, &mut open);
-        let mut slots = [(Aabb::empty(), 0u32); WIDTH];
+        let mut slots = [(Aabb::empty(), 0u32, MIXED); WIDTH];
         for (slot, &c) in slots.iter_mut().zip(&open) {
             let what = if b2[c].is_leaf() {
                 leaf_of[c]
@@ -532,7 +591,7 @@ fn collapse(
                 work.push((c, nodes.len() - 1));
                 (nodes.len() - 1) as u32
             };
-            *slot = (b2[c].aabb, what);
+            *slot = (b2[c].aabb, what, shape[c]);
         }
         nodes[w] = WideNode::new(&slots[..open.len()]);
     }
@@ -642,7 +701,7 @@ mod tests {
         for i in 0..20_000 {
             let r = |s: &mut Sampler| Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
             let count = 1 + i % WIDTH;
-            let boxes: Vec<(Aabb, u32)> = (0..count)
+            let boxes: Vec<(Aabb, u32, u32)> = (0..count)
                 .map(|c| {
                     let lo = r(&mut s) * 4.0;
                     let mut hi = lo + r(&mut s) * 2.0;
@@ -650,7 +709,7 @@ mod tests {
                     if c % 3 == 0 {
                         hi[c % 3] = lo[c % 3];
                     }
-                    (Aabb::new(lo, hi), c as u32 + 1)
+                    (Aabb::new(lo, hi), c as u32 + 1, MIXED)
                 })
                 .collect();
             let node = WideNode::new(&boxes);
@@ -702,7 +761,7 @@ mod tests {
             let axis = i % 3;
             let mut hi = Vec3A::splat(1.0);
             hi[axis] = 0.0;
-            let node = WideNode::new(&[(Aabb::new(Vec3A::ZERO, hi), 1)]);
+            let node = WideNode::new(&[(Aabb::new(Vec3A::ZERO, hi), 1, MIXED)]);
             let mut aim = Vec3A::splat(0.1) + r(&mut s) * 0.8;
             aim[axis] = 0.0;
             let mut o = r(&mut s) * 4.0 - Vec3A::splat(2.0);
@@ -715,7 +774,18 @@ mod tests {
         }
     }
 
-    /// `count` random boxes in a cube of side 10 and both collapses of obvhs's tree over them.
+    /// The shape [`random_tree`] gives box `i` with centre `c`: one per half of the cube, and a
+    /// third for every 50th box, so that subtrees of one shape and mixed ones both occur.
+    fn box_shape(i: usize, c: Vec3A) -> u32 {
+        if i % 50 == 0 {
+            2
+        } else {
+            u32::from(c.x < 5.0)
+        }
+    }
+
+    /// `count` random boxes in a cube of side 10 and both collapses of obvhs's tree over them
+    /// (shapes from [`box_shape`]).
     fn random_tree(s: &mut Sampler, count: usize) -> (Vec<Aabb>, WideBvh) {
         let mut p = || Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
         let boxes: Vec<Aabb> = (0..count)
@@ -727,7 +797,8 @@ mod tests {
         let mut params = BvhBuildParams::slow_build();
         params.pre_split = false;
         params.max_prims_per_leaf = LEAF_SIZE;
-        let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()));
+        let shapes: Vec<u32> = boxes.iter().enumerate().map(|(i, b)| box_shape(i, b.center())).collect();
+        let wide = WideBvh::new(build_bvh2(&boxes, params, &mut Default::default()), &shapes);
         (boxes, wide)
     }
 
@@ -771,6 +842,58 @@ mod tests {
                 assert!(wide.closest.nodes.len() < wide.all.nodes.len());
             }
         }
+    }
+
+    /// The primitives under `x` (a node or a [`LEAF`]-tagged leaf) of `tree`.
+    fn primitives_under(wide: &WideBvh, tree: &WideTree, x: u32, out: &mut Vec<u32>) {
+        if x & LEAF != 0 {
+            let (first, n) = wide.leaves[(x & !LEAF) as usize];
+            out.extend(&wide.primitive_indices[first as usize..(first + n) as usize]);
+            return;
+        }
+        let node = &tree.nodes[x as usize];
+        for c in (0..WIDTH).filter(|&c| node.planes[0].lane(c) != f32::INFINITY) {
+            primitives_under(wide, tree, node.children[c], out);
+        }
+    }
+
+    /// Each child slot names the one shape of every primitive under it, or [`MIXED`] when they
+    /// have several (empty slots too), in both trees; and [`WideNode::shape_mask`] flags exactly
+    /// the slots of the shape asked for.
+    #[test]
+    fn child_slots_name_the_shape_of_their_subtree() {
+        let mut s = Sampler::from_seed(12);
+        let (mut single, mut mixed) = (0, 0);
+        for count in [1usize, 7, 60, 3000] {
+            let (boxes, wide) = random_tree(&mut s, count);
+            for tree in [&wide.closest, &wide.all] {
+                for node in &tree.nodes {
+                    for c in 0..WIDTH {
+                        let want = if node.planes[0].lane(c) == f32::INFINITY {
+                            MIXED
+                        } else {
+                            let mut prims = Vec::new();
+                            primitives_under(&wide, tree, node.children[c], &mut prims);
+                            let shape = |&i: &u32| box_shape(i as usize, boxes[i as usize].center());
+                            let first = shape(&prims[0]);
+                            if prims.iter().all(|i| shape(i) == first) {
+                                single += 1;
+                                first
+                            } else {
+                                mixed += 1;
+                                MIXED
+                            }
+                        };
+                        assert_eq!(node.shapes[c], want, "{count} boxes, slot {c}");
+                    }
+                    for skip in [0, 1, 2] {
+                        let flags = (0..WIDTH).filter(|&c| node.shapes[c] == skip).fold(0, |m, c| m | 1 << c);
+                        assert_eq!(node.shape_mask(skip), flags);
+                    }
+                }
+            }
+        }
+        assert!(single > 100 && mixed > 20, "{single} single-shape and {mixed} mixed slots");
     }
 
     /// Every primitive sits in exactly one leaf, leaves hold 1 to `LEAF_SIZE` primitives, and each

@@ -3,6 +3,7 @@
 
 pub mod analytic;
 pub mod closed;
+pub mod convex;
 mod mesh;
 mod primitives;
 mod sample;
