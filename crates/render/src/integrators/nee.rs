@@ -46,7 +46,7 @@ pub fn transmittance_to(
     dist: f32,
     medium: Option<MediumId>,
 ) -> Rgb {
-    transmittance_impl(scene, p, n_start.map(|n| (u32::MAX, n)), d, dist, medium, None)
+    transmittance_impl(scene, p, n_start, None, d, dist, medium, None)
 }
 
 /// [`transmittance_to`] with the ratio-tracking estimates of heterogeneous segments
@@ -61,7 +61,7 @@ pub fn transmittance_to_sampled(
     medium: Option<MediumId>,
     sampler: &mut Sampler,
 ) -> Rgb {
-    transmittance_impl(scene, p, n_start.map(|n| (u32::MAX, n)), d, dist, medium, Some(sampler))
+    transmittance_impl(scene, p, n_start, None, d, dist, medium, Some(sampler))
 }
 
 /// [`transmittance_to_sampled`] from a point `p` on shape `shape` with geometric normal `n`:
@@ -78,7 +78,7 @@ pub fn transmittance_from_surface_sampled(
     medium: Option<MediumId>,
     sampler: &mut Sampler,
 ) -> Rgb {
-    transmittance_impl(scene, p, Some((shape, n)), d, dist, medium, Some(sampler))
+    transmittance_impl(scene, p, Some(n), Some(shape), d, dist, medium, Some(sampler))
 }
 
 /// Ratio tracking over `[t0, t1]` of `ray` in heterogeneous medium `m`, from `sampler` or,
@@ -107,13 +107,14 @@ fn hetero_segment(
     }
 }
 
+/// `n_start`: the geometric normal at `p` when `p` is on a surface; `shape`: that surface's
+/// shape when the caller knows it, so that the ray may skip it ([`Scene::leaving`]).
 #[allow(clippy::too_many_arguments)]
-/// `start`: the shape (`u32::MAX` when not known) and geometric normal at `p` when `p` is on a
-/// surface.
 fn transmittance_impl(
     scene: &Scene,
     p: Vec3,
-    start: Option<(u32, Vec3)>,
+    n_start: Option<Vec3>,
+    shape: Option<u32>,
     d: Vec3,
     dist: f32,
     mut medium: Option<MediumId>,
@@ -126,8 +127,8 @@ fn transmittance_impl(
         return Rgb::ZERO;
     }
     let target = dist.is_finite().then(|| p + d * dist);
-    let origin = match start {
-        Some((_, n)) => offset_origin(p, n, d),
+    let origin = match n_start {
+        Some(n) => offset_origin(p, n, d),
         None => p,
     };
     // One traversal for the whole shadow ray: it stops at the first blocker found, else returns
@@ -135,8 +136,8 @@ fn transmittance_impl(
     // the optical depth summed over them (one `exp` at the end instead of one per segment).
     let Some(ray) = shadow_ray(origin, target, d) else { return Rgb::ONE };
     // Decided on the ray as traced (aimed at the target from the offset origin).
-    let leaving = match start {
-        Some((shape, n)) if shape != u32::MAX => scene.leaving(shape, n, ray.d),
+    let leaving = match (shape, n_start) {
+        (Some(shape), Some(n)) => scene.leaving(shape, n, ray.d),
         _ => Leaving::NONE,
     };
     let mut hits = [ShadowHit::default(); MAX_SHADOW_HITS];

@@ -439,6 +439,7 @@ impl Accel {
     /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal and per-query
     /// costs").
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn traverse<const ORDERED: bool, K: NodeTest>(
         &self,
         kernel: K,
