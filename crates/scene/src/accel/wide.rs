@@ -74,12 +74,9 @@ pub struct WideNode {
 /// [`WideNode::shapes`] of a subtree with triangles of more than one shape.
 pub const MIXED: u32 = u32::MAX;
 
-/// The shape of each binary node's triangles, or [`MIXED`]: `prim_shape` is each primitive's
-/// shape by its index before the build (what `bvh.primitive_indices` holds).
-fn subtree_shapes(bvh: &Bvh2, prim_shape: &[u32]) -> Vec<u32> {
-    let b2 = &bvh.nodes;
-    let mut shape = vec![MIXED; b2.len()];
-    // Children before their parent (post-order without recursion), whatever obvhs's layout.
+/// The binary tree's nodes in an order where each comes after both of its children (a
+/// pre-order without recursion, reversed), whatever obvhs's layout.
+fn children_first(b2: &[obvhs::bvh2::node::Bvh2Node]) -> Vec<usize> {
     let mut order = Vec::with_capacity(b2.len());
     let mut stack = if b2.is_empty() { vec![] } else { vec![0usize] };
     while let Some(n) = stack.pop() {
@@ -89,7 +86,16 @@ fn subtree_shapes(bvh: &Bvh2, prim_shape: &[u32]) -> Vec<u32> {
             stack.extend([f, f + 1]);
         }
     }
-    for &n in order.iter().rev() {
+    order.reverse();
+    order
+}
+
+/// The shape of each binary node's triangles, or [`MIXED`]: `prim_shape` is each primitive's
+/// shape by its index before the build (what `bvh.primitive_indices` holds).
+fn subtree_shapes(bvh: &Bvh2, prim_shape: &[u32]) -> Vec<u32> {
+    let b2 = &bvh.nodes;
+    let mut shape = vec![MIXED; b2.len()];
+    for n in children_first(b2) {
         shape[n] = if b2[n].is_leaf() {
             let run = &bvh.primitive_indices[b2[n].first_index as usize..][..b2[n].prim_count as usize];
             let first = prim_shape[run[0] as usize];
@@ -431,17 +437,7 @@ impl CollapsePlan {
     fn new(b2: &[obvhs::bvh2::node::Bvh2Node]) -> Self {
         let mut cost = vec![[0.0f32; WIDTH]; b2.len()];
         let mut split = vec![[0u8; WIDTH]; b2.len()];
-        // Post-order without recursion: children before their parent.
-        let mut order = Vec::with_capacity(b2.len());
-        let mut stack = if b2.is_empty() { vec![] } else { vec![0usize] };
-        while let Some(n) = stack.pop() {
-            order.push(n);
-            if !b2[n].is_leaf() {
-                let f = b2[n].first_index as usize;
-                stack.extend([f, f + 1]);
-            }
-        }
-        for &n in order.iter().rev() {
+        for n in children_first(b2) {
             let area = b2[n].aabb.half_area();
             if b2[n].is_leaf() {
                 cost[n] = [area * LEAF_COST; WIDTH];
