@@ -465,7 +465,7 @@ impl Accel {
         // (and `Avx2::run`'s closures) are `#[inline(always)]`: compiled into both kernels'
         // copies of the loop, rustc otherwise left them out of line (the binary's symbols),
         // and then out of the AVX2 function.
-        self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, leaving.0, stack, test);
+        self.traverse_with::<ORDERED, K>(kernel, wide, o, d, t_max, leaving, stack, test);
     }
 
     #[inline(always)]
@@ -477,7 +477,7 @@ impl Accel {
         o: Vec3A,
         d: Vec3A,
         mut t_max: f32,
-        skip: u32,
+        leaving: Leaving,
         stack: &mut [MaybeUninit<Entry>],
         mut test: impl FnMut(u32, &Leaf, f32) -> Option<f32>,
     ) {
@@ -501,8 +501,8 @@ impl Accel {
             } else {
                 let node = &wide.nodes[cur as usize];
                 let (mut mask, t_near) = kernel.intersect(node, &ray, t_max);
-                if skip != NO_SHAPE {
-                    mask &= !node.shape_mask(skip);
+                if leaving != Leaving::NONE {
+                    mask &= !node.shape_mask(leaving.0);
                 }
                 if mask != 0 {
                     let c = mask.trailing_zeros() as usize;
@@ -1050,9 +1050,8 @@ mod tests {
                 // A point on a random triangle of the sphere, and a direction leaving it outwards.
                 let tri = (s.next_1d() * sphere.indices.len() as f32) as usize % sphere.indices.len();
                 let [a, b, c] = sphere.vertices(tri);
-                let (u, v) = (s.next_1d(), s.next_1d());
-                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
-                let p = a + (b - a) * u + (c - a) * v;
+                let bary = haze_core::sampling::sample_uniform_triangle(s.next_2d());
+                let p = a + (b - a) * bary.x + (c - a) * bary.y;
                 let n = sphere.face_normal(tri);
                 let mut d = haze_core::sampling::sample_uniform_sphere(s.next_2d());
                 if d.dot(n) < 0.0 {
