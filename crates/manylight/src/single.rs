@@ -444,4 +444,77 @@ mod tests {
             }
         }
     }
+
+    /// Single scattering from the sun (a `directional` emitter, `from_infinity`) along segments
+    /// inside a fog cube, against the integral `Int_0^s E sigma_s f_p T(u) T(x_u -> out) du` by
+    /// quadrature (the shadow ray leaves the cube towards the sun): the distance mixture and the
+    /// shadow transmittance to infinity. Chromatic fog, HG phase.
+    #[test]
+    fn sun_single_scattering_matches_quadrature() {
+        let xml = r#"<scene version="3.0.0">
+            <medium type="homogeneous" id="fog">
+                <rgb name="sigma_t" value="0.5, 0.9, 1.6"/><float name="albedo" value="0.8"/>
+                <phase type="hg"><float name="g" value="0.4"/></phase>
+            </medium>
+            <sensor type="perspective">
+                <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+                <film type="hdrfilm"><integer name="width" value="2"/><integer name="height" value="2"/></film>
+            </sensor>
+            <shape type="cube"><bsdf type="null"/><ref name="interior" id="fog"/></shape>
+            <emitter type="directional">
+                <vector name="direction" x="0.3" y="-1" z="-0.5"/>
+                <rgb name="irradiance" value="3, 2, 1"/>
+            </emitter>
+        </scene>"#;
+        let scene = load_str(xml, Path::new("sun.xml"), Path::new("."), &LoadOptions::default()).unwrap();
+        let Emitter::Directional { d, irradiance } = scene.emitters[0].clone() else { panic!("the sun") };
+        let med = estimator_medium(&scene, 0);
+        let wi = -d;
+        // Distance from `x` inside the cube [-1, 1]^3 to its boundary along `wi`.
+        let exit = |x: Vec3| -> f32 {
+            (0..3)
+                .filter(|&k| wi[k] != 0.0)
+                .map(|k| ((if wi[k] > 0.0 { 1.0 } else { -1.0 }) - x[k]) / wi[k])
+                .fold(f32::INFINITY, f32::min)
+        };
+        let segments = [
+            Segment::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0), 2.0),
+            Segment::new(Vec3::new(-0.9, -0.8, 0.7), Vec3::new(1.0, 0.9, -0.8).normalize(), 2.5),
+            Segment::new(Vec3::new(0.5, 0.9, -0.2), Vec3::new(0.0, -1.0, 0.1).normalize(), 0.3),
+        ];
+        for seg in segments {
+            let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE, events: 0 };
+            let phase = med.phase.eval(d, -seg.d);
+            let exact: [f64; 3] = std::array::from_fn(|c| {
+                let f = |u: f64| {
+                    let x = seg.at(u as f32);
+                    let tau = med.sigma_t[c] * (u as f32 + exit(x));
+                    (irradiance[c] * med.sigma_s[c] * phase * (-tau).exp()) as f64
+                };
+                haze_testkit::quadrature::integrate(f, 0.0, seg.len as f64, &[], 1e-6)
+            });
+            let mut sampler = Sampler::from_seed(8);
+            let n = 40_000;
+            let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
+            for _ in 0..n {
+                let v = single_scattering(&scene, &cs, &mut sampler);
+                for c in 0..3 {
+                    sum[c] += v[c] as f64;
+                    sum2[c] += (v[c] as f64).powi(2);
+                }
+            }
+            for c in 0..3 {
+                let mean = sum[c] / n as f64;
+                let se = ((sum2[c] / n as f64 - mean * mean) / n as f64).sqrt();
+                let z = (mean - exact[c]) / se.max(1e-6 * exact[c].abs()).max(1e-30);
+                assert!(z.abs() < 4.5, "{seg:?} channel {c}: {mean} vs {} (z {z:.2})", exact[c]);
+                // The test has power: a 5% error would fail it.
+                assert!(
+                    0.05 * exact[c] > 4.5 * se,
+                    "{seg:?} channel {c}: se {se} too large for {}",
+                    exact[c]
+                );
+            }
+        }
+    }
 }

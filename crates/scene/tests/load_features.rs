@@ -155,6 +155,32 @@ fn emitters() {
     assert_eq!(s.shapes[0].emitter, Some(4));
 }
 
+/// Mitsuba 3's `directional`: the travel direction from `direction` (normalised) or from
+/// `to_world`'s local +z, +z by default; `irradiance` 1 by default.
+#[test]
+fn directional_emitter() {
+    let s = load(&format!(
+        r#"{SENSOR}
+        <emitter type="directional">
+            <vector name="direction" x="0" y="-2" z="0"/>
+            <rgb name="irradiance" value="3, 2, 1"/>
+        </emitter>
+        <emitter type="directional">
+            <transform name="to_world"><rotate x="1" angle="90"/></transform>
+        </emitter>
+        <emitter type="directional"/>"#
+    ));
+    let Emitter::Directional { d, irradiance } = s.emitters[0] else { panic!("directional") };
+    assert!(close(d, Vec3::new(0.0, -1.0, 0.0)), "{d}");
+    assert_eq!(irradiance, Rgb::new(3.0, 2.0, 1.0));
+    // A rotation by 90 degrees about +x takes +z to -y.
+    let Emitter::Directional { d, irradiance } = s.emitters[1] else { panic!("directional") };
+    assert!(close(d, Vec3::new(0.0, -1.0, 0.0)), "{d}");
+    assert_eq!(irradiance, Rgb::ONE);
+    assert_eq!(s.emitters[2], Emitter::Directional { d: Vec3::Z, irradiance: Rgb::ONE });
+    assert!(s.emitters.iter().all(|e| e.is_delta() && e.is_infinite() && !e.is_environment()));
+}
+
 #[test]
 fn integrators_and_sensor_options() {
     let s = load(
