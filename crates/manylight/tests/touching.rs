@@ -1,4 +1,4 @@
-//! Surfaces that touch (`docs/theory.md` §14): a scene where a medium boundary lies flush
+//! Surfaces that touch (`docs/theory.md` §13): a scene where a medium boundary lies flush
 //! against another surface renders, with every integrator, as its two neighbours with the
 //! boundary moved by 1 mm to either side (which are unambiguous, and agree with each other to
 //! far below the noise here). The scenes are in `tests/data/touching/`: a fog cube resting on a
@@ -11,8 +11,11 @@
 //! a camera on the boundary saw no fog when its declared medium was the vacuum outside.
 //!
 //! Statistic as in `tests/integrators.rs`: per channel-pixel z with pooled variances, at most 1%
-//! of channel-pixels beyond the Sidak threshold, and the image-mean z within 5, the image mean's
-//! variance from the spread of per-pass means (the pixels of a many-light pass share its lights).
+//! of channel-pixels beyond the Sidak threshold, and the paired z-score of the image means within
+//! 5 unless the means differ by less than `MEAN_TOLERANCE`: every variant renders with the same seeds, so their paths differ only where the geometry
+//! does, and the per-pass differences of the image means resolve the few percent by which a wrong
+//! flush image is off (the per-pixel test, which takes the renders as independent, is then
+//! conservative).
 
 use haze_manylight::integrators::{
     LightBudget, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator, Vrls,
@@ -36,7 +39,13 @@ struct Passes {
     pass_means: Vec<f64>,
 }
 
-fn render_passes<I: Integrator>(scene: &Scene, integrator: &I, passes: u32, spp_per_pass: u32, seed: u64) -> Passes {
+fn render_passes<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    passes: u32,
+    spp_per_pass: u32,
+    seed: u64,
+) -> Passes {
     let mut total: Option<Film> = None;
     let mut pass_means = Vec::new();
     for k in 0..passes {
@@ -59,14 +68,25 @@ fn render_passes<I: Integrator>(scene: &Scene, integrator: &I, passes: u32, spp_
     Passes { film: total.expect("at least one pass"), pass_means }
 }
 
-impl Passes {
-    fn mean_and_variance(&self) -> (f64, f64) {
-        let n = self.pass_means.len() as f64;
-        let mean = self.pass_means.iter().sum::<f64>() / n;
-        let var = self.pass_means.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
-        (mean, var / n)
+/// z-score of the mean per-pass difference of the image means of two renders with the same
+/// seeds (paired: the light and camera paths of a pass are nearly the same in both, so most of
+/// their noise cancels in the difference).
+fn paired_z(a: &Passes, b: &Passes) -> f64 {
+    let d: Vec<f64> = a.pass_means.iter().zip(&b.pass_means).map(|(x, y)| x - y).collect();
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    if var > 0.0 {
+        mean / (var / n).sqrt()
+    } else {
+        0.0
     }
 }
+
+/// Relative difference of the image means below which a significant paired difference is
+/// accepted: the neighbours differ physically by 1 mm of medium (about 0.1-0.2% of these images,
+/// which the paired volpath renders resolve at z about 4), the errors this catches are 3-30%.
+const MEAN_TOLERANCE: f64 = 0.005;
 
 /// The methods of the comparison.
 const METHODS: [&str; 5] = ["volpath", "vrl", "vpl", "vrl_lightcuts", "vpl_lightcuts"];
@@ -101,25 +121,23 @@ fn disagreement(what: &str, a: &Passes, b: &Passes) -> Option<String> {
         pool_variance(&f.sample_variance(None), w, h, 3).iter().map(|v| v / f.samples as f32).collect()
     };
     let r = z_test(&a.film.mean(None), &var_of(&a.film), &b.film.mean(None), &var_of(&b.film), 0.01);
-    let ((ma, va), (mb, vb)) = (a.mean_and_variance(), b.mean_and_variance());
-    let mean_z = (ma - mb) / (va + vb).sqrt();
-    let line = format!("{what}: {r}; image means {ma:.5} vs {mb:.5} (z = {mean_z:.2})");
+    let mean_z = paired_z(a, b);
+    let mean = |p: &Passes| p.pass_means.iter().sum::<f64>() / p.pass_means.len() as f64;
+    let rel = mean(a) / mean(b) - 1.0;
+    let line = format!("{what}: {r}; image means differ by {:+.2}%, paired z = {mean_z:.2}", 100.0 * rel);
     println!("{line}");
-    (r.failed_fraction() > 0.01 || mean_z.abs() > 5.0).then_some(line)
+    (r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 && rel.abs() > MEAN_TOLERANCE).then_some(line)
 }
 
 /// Each of `flush` agrees with both `neighbours`, for every method.
 fn check(label: &str, flush: &[(&str, Scene)], neighbours: &[(&str, Scene)], spp: u32, paths: u64) {
     let mut failures = Vec::new();
     for (m, method) in METHODS.iter().enumerate() {
-        let seed = 10 * m as u64;
-        let others: Vec<(&str, Passes)> = neighbours
-            .iter()
-            .enumerate()
-            .map(|(k, (name, s))| (*name, render_with(s, method, spp, paths, seed + 1 + k as u64)))
-            .collect();
+        let seed = 10 * m as u64 + 1;
+        let others: Vec<(&str, Passes)> =
+            neighbours.iter().map(|(name, s)| (*name, render_with(s, method, spp, paths, seed))).collect();
         for (name, scene) in flush {
-            let f = render_with(scene, method, spp, paths, seed + 5);
+            let f = render_with(scene, method, spp, paths, seed);
             for (other, o) in &others {
                 failures.extend(disagreement(&format!("{label} {method}: {name} vs {other}"), &f, o));
             }
@@ -131,19 +149,37 @@ fn check(label: &str, flush: &[(&str, Scene)], neighbours: &[(&str, Scene)], spp
 #[test]
 fn fog_cube_on_a_floor_renders_as_lifted_and_lowered() {
     let scene = |y| load("fog-on-floor.xml", ("y", y));
-    check("fog on floor", &[("flush", scene("0.5"))], &[("lifted 1 mm", scene("0.501")), ("lowered 1 mm", scene("0.499"))], 64, 60);
+    check(
+        "fog on floor",
+        &[("flush", scene("0.5"))],
+        &[("lifted 1 mm", scene("0.501")), ("lowered 1 mm", scene("0.499"))],
+        64,
+        60,
+    );
 }
 
 #[test]
 fn fog_cube_against_a_wall_renders_as_its_neighbours() {
     let scene = |x| load("fog-against-wall.xml", ("x", x));
-    check("fog against wall", &[("flush", scene("0.5"))], &[("1 mm gap", scene("0.499")), ("wall 1 mm in", scene("0.501"))], 64, 60);
+    check(
+        "fog against wall",
+        &[("flush", scene("0.5"))],
+        &[("1 mm gap", scene("0.499")), ("wall 1 mm in", scene("0.501"))],
+        64,
+        60,
+    );
 }
 
 #[test]
 fn medium_bounded_by_its_glass_renders_as_its_neighbours() {
     let scene = |s| load("medium-in-glass.xml", ("s", s));
-    check("medium in glass", &[("flush", scene("0.5"))], &[("1 mm inside", scene("0.499")), ("1 mm outside", scene("0.501"))], 64, 60);
+    check(
+        "medium in glass",
+        &[("flush", scene("0.5"))],
+        &[("1 mm inside", scene("0.499")), ("1 mm outside", scene("0.501"))],
+        64,
+        60,
+    );
 }
 
 /// The camera on the boundary renders the same whichever side's medium it declares.

@@ -1,4 +1,4 @@
-//! Surfaces that touch (`docs/theory.md` §14): where a medium boundary lies flush against
+//! Surfaces that touch (`docs/theory.md` §13): where a medium boundary lies flush against
 //! another surface (a fog box on a floor, water in its glass, two media sharing a face), a ray
 //! meets both at the same distance and a closest-hit query returns either, arbitrarily; the ray
 //! offset after the interaction (`haze_core::ray::offset_origin`) then steps over the other one
@@ -66,9 +66,10 @@ impl Boundary {
         let side = Side { n, interior: shape.interior, exterior: shape.exterior };
         let len = self.len as usize;
         // The same shape seen twice (two triangles at an edge, or the probe and the hit).
-        if self.sides[..len].iter().any(|s| {
-            s.interior == side.interior && s.exterior == side.exterior && s.n.dot(n) > 0.0
-        }) {
+        if self.sides[..len]
+            .iter()
+            .any(|s| s.interior == side.interior && s.exterior == side.exterior && s.n.dot(n) > 0.0)
+        {
             return;
         }
         self.sides[len] = side;
@@ -84,7 +85,7 @@ impl Boundary {
     /// The medium a ray leaving the point in direction `d` is in, `current` if no boundary
     /// touches here. With one boundary: its exterior when `d . n > 0`, else its interior
     /// (Mitsuba 3's `SurfaceInteraction::target_medium`, [`Shape::medium_towards`]). With
-    /// several (`docs/theory.md` §14): the first declared interior of a boundary the ray
+    /// several (`docs/theory.md` §13): the first declared interior of a boundary the ray
     /// enters, else the first exterior of a boundary it leaves, skipping any medium that some
     /// boundary says the ray is leaving (the exterior of one it enters, the interior of one it
     /// leaves); the single-boundary answer of the first one if every candidate is skipped.
@@ -101,9 +102,12 @@ impl Boundary {
             }
             _ => {
                 let enters = |s: &Side| d.dot(s.n) <= 0.0;
-                let left_behind =
-                    |m: Option<MediumId>| sides.iter().any(|s| if enters(s) { s.exterior == m } else { s.interior == m });
-                if let Some(s) = sides.iter().find(|s| enters(s) && s.interior.is_some() && !left_behind(s.interior)) {
+                let left_behind = |m: Option<MediumId>| {
+                    sides.iter().any(|s| if enters(s) { s.exterior == m } else { s.interior == m })
+                };
+                if let Some(s) =
+                    sides.iter().find(|s| enters(s) && s.interior.is_some() && !left_behind(s.interior))
+                {
                     return s.interior;
                 }
                 if let Some(s) = sides.iter().find(|s| !enters(s) && !left_behind(s.exterior)) {
@@ -154,7 +158,7 @@ impl Scene {
 
     /// The hit `h` of a closest-hit query, settled against the surfaces touching it: if `h` is
     /// on a `null` surface and a surface that is not `null` touches it there, that surface's
-    /// interaction (at `h`'s distance) instead (`docs/theory.md` §14, rule 1). Every
+    /// interaction (at `h`'s distance) instead (`docs/theory.md` §13, rule 1). Every
     /// closest-hit answer of the scene goes through here ([`Self::intersect`],
     /// [`Self::interaction`]).
     #[inline]
@@ -184,7 +188,12 @@ impl Scene {
     /// The medium a ray leaving the surface interaction `h` in direction `d` is in, having
     /// arrived in `current`: [`Boundary::medium_towards`] of the boundaries at `h`.
     #[inline]
-    pub fn medium_towards(&self, h: &SurfaceInteraction, d: Vec3, current: Option<MediumId>) -> Option<MediumId> {
+    pub fn medium_towards(
+        &self,
+        h: &SurfaceInteraction,
+        d: Vec3,
+        current: Option<MediumId>,
+    ) -> Option<MediumId> {
         self.medium_leaving(h.shape, h.p, h.n, d, current)
     }
 
@@ -212,7 +221,12 @@ impl Scene {
     /// Returns false, changing nothing, for any other BSDF. The one step of volpath, the
     /// many-light camera walk, light tracing and the caustic paths.
     #[inline]
-    pub fn cross_if_null(&self, h: &SurfaceInteraction, ray: &mut Ray, medium: &mut Option<MediumId>) -> bool {
+    pub fn cross_if_null(
+        &self,
+        h: &SurfaceInteraction,
+        ray: &mut Ray,
+        medium: &mut Option<MediumId>,
+    ) -> bool {
         if !self.shapes[h.shape as usize].bsdf.is_null() {
             return false;
         }
@@ -223,7 +237,7 @@ impl Scene {
 
     /// The medium of a camera ray `ray` whose camera declares `declared`: `declared`, unless
     /// the camera's pinhole lies on medium boundaries, whose medium on the ray's side it is
-    /// then (`docs/theory.md` §14: a camera on the boundary of a fog box sees the fog in the
+    /// then (`docs/theory.md` §13: a camera on the boundary of a fog box sees the fog in the
     /// directions into the box, whichever side its declared medium is).
     pub fn camera_medium(&self, ray: &Ray, declared: Option<MediumId>) -> Option<MediumId> {
         if !self.any_transition {

@@ -95,7 +95,7 @@ pub struct Scene {
     /// ([`convex::clear_sides`]; none for analytic shapes, which the BVH does not hold).
     clear: Vec<ClearSides>,
     /// Per shape: a face of it touches a medium boundary (`shape::coincident`), so its hits
-    /// are settled by `Scene::resolve_hit` (`boundary.rs`, `docs/theory.md` §14).
+    /// are settled by `Scene::resolve_hit` (`boundary.rs`, `docs/theory.md` §13).
     pub(crate) touching: Vec<bool>,
     /// Some shape declares media.
     pub(crate) any_transition: bool,

@@ -164,7 +164,7 @@ fn transmittance_impl(
         }
         last = h.t;
         let (shape_id, n) = scene.shadow_crossing(h);
-        // Surfaces touching this one (`docs/theory.md` §14) are crossed together: the medium
+        // Surfaces touching this one (`docs/theory.md` §13) are crossed together: the medium
         // beyond is decided by all their boundaries at once, not by their order along the ray.
         let mut boundary = Boundary::of(&scene.shapes[shape_id as usize], n);
         let mut end = i + 1;

@@ -944,12 +944,7 @@ impl Accel {
     }
 
     #[inline(always)]
-    fn probe_with<K: NodeTest>(
-        &self,
-        kernel: K,
-        ray: &Ray,
-        out: &mut [ProbeHit; MAX_PROBE_HITS],
-    ) -> usize {
+    fn probe_with<K: NodeTest>(&self, kernel: K, ray: &Ray, out: &mut [ProbeHit; MAX_PROBE_HITS]) -> usize {
         let mut n = 0usize;
         if let Some(bvh) = &self.bvh {
             let o: Vec3A = ray.o.into();

@@ -3,7 +3,7 @@
 //! at least one of the two declares media. A fog box resting on a floor, a smoke volume against
 //! a wall, a glass and the null boundary of the water inside it. At such a place a ray meets both
 //! surfaces at the same distance, and which one a closest-hit query returns is arbitrary; the
-//! scene resolves those hits by the rule of `docs/theory.md` §14 (`crate::coincident`), but only
+//! scene resolves those hits by the rule of `docs/theory.md` §13 (`crate::coincident`), but only
 //! on the shapes marked here, so scenes without touching surfaces pay nothing.
 //!
 //! The test is conservative where it is cheap to be (a disk is taken as its bounding square) and
@@ -46,10 +46,7 @@ pub fn touching_shapes(shapes: &[Shape]) -> Vec<bool> {
         return touching;
     }
     let pieces = planar_pieces(shapes);
-    let max_coord = pieces
-        .iter()
-        .flat_map(|p| p.v)
-        .fold(0.0f32, |m, v| m.max(v.abs().max_element()));
+    let max_coord = pieces.iter().flat_map(|p| p.v).fold(0.0f32, |m, v| m.max(v.abs().max_element()));
     let tol = 2.0 * RAY_EPSILON * (1.0 + max_coord);
     let offset_cell = 64.0 * tol;
     // Boundary pieces, entered under both orientations of their plane.
@@ -60,16 +57,21 @@ pub fn touching_shapes(shapes: &[Shape]) -> Vec<bool> {
         }
         for n in [p.n, -p.n] {
             let key = [n.x / NORMAL_CELL, n.y / NORMAL_CELL, n.z / NORMAL_CELL, n.dot(p.v[0]) / offset_cell];
-            let tols =
-                [NORMAL_TOLERANCE / NORMAL_CELL, NORMAL_TOLERANCE / NORMAL_CELL, NORMAL_TOLERANCE / NORMAL_CELL, 0.5];
+            let tols = [
+                NORMAL_TOLERANCE / NORMAL_CELL,
+                NORMAL_TOLERANCE / NORMAL_CELL,
+                NORMAL_TOLERANCE / NORMAL_CELL,
+                0.5,
+            ];
             for cell in neighbour_cells(key, tols) {
                 table.entry(cell).or_default().push(i as u32);
             }
         }
     }
     for (j, q) in pieces.iter().enumerate() {
-        let key = [q.n.x / NORMAL_CELL, q.n.y / NORMAL_CELL, q.n.z / NORMAL_CELL, q.n.dot(q.v[0]) / offset_cell]
-            .map(|x| x.floor() as i32);
+        let key =
+            [q.n.x / NORMAL_CELL, q.n.y / NORMAL_CELL, q.n.z / NORMAL_CELL, q.n.dot(q.v[0]) / offset_cell]
+                .map(|x| x.floor() as i32);
         let Some(candidates) = table.get(&key) else { continue };
         for &i in candidates {
             let p = &pieces[i as usize];
@@ -159,9 +161,8 @@ fn spheres_touching(shapes: &[Shape], touching: &mut [bool]) {
 /// Every vertex of each piece within the offset distance (twice) of the other's plane, and
 /// their projections overlapping with positive area.
 fn pieces_touch(p: &Piece, q: &Piece) -> bool {
-    let near_plane = |a: &Piece, b: &Piece| {
-        b.v.iter().all(|&v| (v - a.v[0]).dot(a.n).abs() <= 2.0 * offset_scale(v))
-    };
+    let near_plane =
+        |a: &Piece, b: &Piece| b.v.iter().all(|&v| (v - a.v[0]).dot(a.n).abs() <= 2.0 * offset_scale(v));
     if !near_plane(p, q) || !near_plane(q, p) {
         return false;
     }
@@ -276,7 +277,11 @@ mod tests {
         glass.bsdf = Bsdf::Dielectric { eta: 1.5 };
         assert_eq!(touching_shapes(&[glass, fog_cube(0.0)]), vec![true, true]);
         let sphere = |r: f32, interior| {
-            shape(Geometry::Sphere { center: Vec3::ONE, radius: r, flip_normals: false }, Bsdf::Null, interior)
+            shape(
+                Geometry::Sphere { center: Vec3::ONE, radius: r, flip_normals: false },
+                Bsdf::Null,
+                interior,
+            )
         };
         assert_eq!(touching_shapes(&[sphere(1.0, Some(0)), sphere(1.0, None)]), vec![true, true]);
         assert_eq!(touching_shapes(&[sphere(1.0, Some(0)), sphere(1.01, None)]), vec![false, false]);
