@@ -1,4 +1,4 @@
-//! Surfaces that touch (`docs/theory.md` §13): a scene where a medium boundary lies flush
+//! Surfaces that touch (`docs/theory.md` §14): a scene where a medium boundary lies flush
 //! against another surface renders, with every integrator, as its two neighbours with the
 //! boundary moved by 1 mm to either side (which are unambiguous, and agree with each other to
 //! far below the noise here). The scenes are in `tests/data/touching/`: a fog cube resting on a

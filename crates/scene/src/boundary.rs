@@ -1,4 +1,4 @@
-//! Surfaces that touch (`docs/theory.md` §13): where a medium boundary lies flush against
+//! Surfaces that touch (`docs/theory.md` §14): where a medium boundary lies flush against
 //! another surface (a fog box on a floor, water in its glass, two media sharing a face), a ray
 //! meets both at the same distance and a closest-hit query returns either, arbitrarily; the ray
 //! offset after the interaction (`haze_core::ray::offset_origin`) then steps over the other one
@@ -85,38 +85,42 @@ impl Boundary {
     /// The medium a ray leaving the point in direction `d` is in, `current` if no boundary
     /// touches here. With one boundary: its exterior when `d . n > 0`, else its interior
     /// (Mitsuba 3's `SurfaceInteraction::target_medium`, [`Shape::medium_towards`]). With
-    /// several (`docs/theory.md` §13): the first declared interior of a boundary the ray
+    /// several (`docs/theory.md` §14): the first declared interior of a boundary the ray
     /// enters, else the first exterior of a boundary it leaves, skipping any medium that some
     /// boundary says the ray is leaving (the exterior of one it enters, the interior of one it
     /// leaves); the single-boundary answer of the first one if every candidate is skipped.
+    #[inline]
     pub fn medium_towards(&self, d: Vec3, current: Option<MediumId>) -> Option<MediumId> {
-        let sides = &self.sides[..self.len as usize];
-        match sides {
-            [] => current,
-            [s] => {
+        match self.len {
+            0 => current,
+            1 => {
+                let s = &self.sides[0];
                 if d.dot(s.n) > 0.0 {
                     s.exterior
                 } else {
                     s.interior
                 }
             }
-            _ => {
-                let enters = |s: &Side| d.dot(s.n) <= 0.0;
-                let left_behind = |m: Option<MediumId>| {
-                    sides.iter().any(|s| if enters(s) { s.exterior == m } else { s.interior == m })
-                };
-                if let Some(s) =
-                    sides.iter().find(|s| enters(s) && s.interior.is_some() && !left_behind(s.interior))
-                {
-                    return s.interior;
-                }
-                if let Some(s) = sides.iter().find(|s| !enters(s) && !left_behind(s.exterior)) {
-                    return s.exterior;
-                }
-                Boundary { sides: [sides[0], Side::default(), Side::default(), Side::default()], len: 1 }
-                    .medium_towards(d, current)
-            }
+            _ => self.medium_towards_several(d, current),
         }
+    }
+
+    /// [`Self::medium_towards`] with two boundaries or more.
+    #[cold]
+    fn medium_towards_several(&self, d: Vec3, current: Option<MediumId>) -> Option<MediumId> {
+        let sides = &self.sides[..self.len as usize];
+        let enters = |s: &Side| d.dot(s.n) <= 0.0;
+        let left_behind = |m: Option<MediumId>| {
+            sides.iter().any(|s| if enters(s) { s.exterior == m } else { s.interior == m })
+        };
+        if let Some(s) = sides.iter().find(|s| enters(s) && s.interior.is_some() && !left_behind(s.interior))
+        {
+            return s.interior;
+        }
+        if let Some(s) = sides.iter().find(|s| !enters(s) && !left_behind(s.exterior)) {
+            return s.exterior;
+        }
+        Boundary { len: 1, ..*self }.medium_towards(d, current)
     }
 }
 
@@ -130,10 +134,38 @@ fn probe_reach(p: Vec3) -> f32 {
 
 impl Scene {
     /// True when shape `shape` has a face touching a medium boundary
-    /// (`crate::shape::coincident`), so that its hits are settled by [`Self::resolve_hit`].
+    /// (`crate::shape::coincident`).
     #[inline]
     pub fn touches(&self, shape: u32) -> bool {
-        self.touching[shape as usize]
+        // `touching` is empty when nothing in the scene touches: one length test.
+        self.touching.get(shape as usize).is_some_and(|faces| !faces.is_empty())
+    }
+
+    /// True when the face `prim` of shape `shape` touches a medium boundary, so that its hits
+    /// are settled by [`Self::resolve_hit`] and [`Self::medium_towards`].
+    #[inline]
+    pub fn touches_at(&self, shape: u32, prim: u32) -> bool {
+        self.touching
+            .get(shape as usize)
+            .is_some_and(|faces| faces.get(prim as usize).copied().unwrap_or(false))
+    }
+
+    /// True when the face a shadow ray crosses at `h` ([`Self::shadow_hits`]) touches a medium
+    /// boundary ([`Self::touches_at`]).
+    #[inline]
+    pub fn shadow_touches(&self, shape: u32, h: &crate::accel::ShadowHit) -> bool {
+        self.touches(shape) && self.touches_at(shape, self.accel.shadow_prim(h))
+    }
+
+    /// False when leaving shape `shape` cannot enter another medium than the path arrived in,
+    /// even where it touches a boundary: it declares no media and only reflects
+    /// ([`crate::Bsdf::transmits`]), so every direction leaves on the side the path came from,
+    /// whose medium rule 1 kept right (the floor under the fog reflects into the fog). Those
+    /// shapes skip the probe: a floor under fog boxes is much of the image.
+    #[inline]
+    fn medium_may_change(&self, shape: u32) -> bool {
+        let s = &self.shapes[shape as usize];
+        s.is_medium_transition() || s.bsdf.transmits()
     }
 
     /// The surfaces crossed by the segment `p ± probe_reach(p) a` (`a` a unit vector).
@@ -147,23 +179,29 @@ impl Scene {
     pub fn boundary_at(&self, shape: u32, p: Vec3, n: Vec3) -> Boundary {
         let mut b = Boundary::of(&self.shapes[shape as usize], n);
         if self.touches(shape) {
-            let mut hits = [ProbeHit::EMPTY; MAX_PROBE_HITS];
-            let count = self.probe_at(p, n, &mut hits);
-            for h in &hits[..count] {
-                b.push(&self.shapes[h.shape as usize], h.n);
-            }
+            self.add_touching(&mut b, p, n);
         }
         b
     }
 
+    /// Adds to `b` the boundaries of the surfaces the probe along `n` through `p` crosses.
+    #[cold]
+    fn add_touching(&self, b: &mut Boundary, p: Vec3, n: Vec3) {
+        let mut hits = [ProbeHit::EMPTY; MAX_PROBE_HITS];
+        let count = self.probe_at(p, n, &mut hits);
+        for h in &hits[..count] {
+            b.push(&self.shapes[h.shape as usize], h.n);
+        }
+    }
+
     /// The hit `h` of a closest-hit query, settled against the surfaces touching it: if `h` is
     /// on a `null` surface and a surface that is not `null` touches it there, that surface's
-    /// interaction (at `h`'s distance) instead (`docs/theory.md` §13, rule 1). Every
+    /// interaction (at `h`'s distance) instead (`docs/theory.md` §14, rule 1). Every
     /// closest-hit answer of the scene goes through here ([`Self::intersect`],
     /// [`Self::interaction`]).
     #[inline]
     pub fn resolve_hit(&self, h: SurfaceInteraction) -> SurfaceInteraction {
-        if !self.touches(h.shape) || !self.shapes[h.shape as usize].bsdf.is_null() {
+        if !self.touches_at(h.shape, h.prim) || !self.shapes[h.shape as usize].bsdf.is_null() {
             return h;
         }
         self.resolve_touching(h)
@@ -194,11 +232,28 @@ impl Scene {
         d: Vec3,
         current: Option<MediumId>,
     ) -> Option<MediumId> {
-        self.medium_leaving(h.shape, h.p, h.n, d, current)
+        if self.touches_at(h.shape, h.prim) && self.medium_may_change(h.shape) {
+            self.medium_towards_touching(h, d, current)
+        } else {
+            self.shapes[h.shape as usize].medium_towards(d, h.n, current)
+        }
+    }
+
+    #[cold]
+    fn medium_towards_touching(
+        &self,
+        h: &SurfaceInteraction,
+        d: Vec3,
+        current: Option<MediumId>,
+    ) -> Option<MediumId> {
+        let mut b = Boundary::of(&self.shapes[h.shape as usize], h.n);
+        self.add_touching(&mut b, h.p, h.n);
+        b.medium_towards(d, current)
     }
 
     /// [`Self::medium_towards`] from the point `p` of shape `shape` with geometric normal `n`
-    /// (a surface light's vertex, an emitter's sample).
+    /// (a surface light's vertex, an emitter's sample), the face unknown: any face of a shape
+    /// that touches somewhere probes.
     #[inline]
     pub fn medium_leaving(
         &self,
@@ -208,7 +263,7 @@ impl Scene {
         d: Vec3,
         current: Option<MediumId>,
     ) -> Option<MediumId> {
-        if self.touches(shape) {
+        if self.touches(shape) && self.medium_may_change(shape) {
             self.boundary_at(shape, p, n).medium_towards(d, current)
         } else {
             self.shapes[shape as usize].medium_towards(d, n, current)
@@ -237,19 +292,24 @@ impl Scene {
 
     /// The medium of a camera ray `ray` whose camera declares `declared`: `declared`, unless
     /// the camera's pinhole lies on medium boundaries, whose medium on the ray's side it is
-    /// then (`docs/theory.md` §13: a camera on the boundary of a fog box sees the fog in the
+    /// then (`docs/theory.md` §14: a camera on the boundary of a fog box sees the fog in the
     /// directions into the box, whichever side its declared medium is).
+    #[inline]
     pub fn camera_medium(&self, ray: &Ray, declared: Option<MediumId>) -> Option<MediumId> {
         if !self.any_transition {
             return declared;
         }
+        self.pinhole_boundary().medium_towards(ray.d, declared)
+    }
+
+    /// The medium boundaries through the camera's pinhole, found once per pinhole position.
+    fn pinhole_boundary(&self) -> Boundary {
         let pinhole = self.camera.to_world.transform_point3(Vec3::ZERO);
-        let boundary = match self.camera_boundary.get() {
+        match self.camera_boundary.get() {
             Some((p, b)) if *p == pinhole => *b,
             Some(_) => self.boundary_through(pinhole),
             None => self.camera_boundary.get_or_init(|| (pinhole, self.boundary_through(pinhole))).1,
-        };
-        boundary.medium_towards(ray.d, declared)
+        }
     }
 
     /// The medium boundaries passing within the ray offset of the point `p`, found by probes

@@ -94,9 +94,10 @@ pub struct Scene {
     /// Per shape: the sides of its faces from which it cannot be hit again
     /// ([`convex::clear_sides`]; none for analytic shapes, which the BVH does not hold).
     clear: Vec<ClearSides>,
-    /// Per shape: a face of it touches a medium boundary (`shape::coincident`), so its hits
-    /// are settled by `Scene::resolve_hit` (`boundary.rs`, `docs/theory.md` §13).
-    pub(crate) touching: Vec<bool>,
+    /// Per shape, per primitive: the face touches a medium boundary (`shape::coincident`), so
+    /// its hits are settled by `Scene::resolve_hit` (`boundary.rs`, `docs/theory.md` §14); an
+    /// empty list when no face of the shape does.
+    pub(crate) touching: Vec<Vec<bool>>,
     /// Some shape declares media.
     pub(crate) any_transition: bool,
     /// The camera's pinhole and the medium boundaries through it (`Scene::camera_medium`).
@@ -174,7 +175,7 @@ impl Scene {
                 _ => ClearSides::default(),
             })
             .collect();
-        let touching = crate::shape::coincident::touching_shapes(&shapes);
+        let touching = crate::shape::coincident::touching_faces(&shapes);
         let any_transition = shapes.iter().any(Shape::is_medium_transition);
         Scene {
             emitter_tables,

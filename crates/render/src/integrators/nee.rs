@@ -164,32 +164,37 @@ fn transmittance_impl(
         }
         last = h.t;
         let (shape_id, n) = scene.shadow_crossing(h);
-        // Surfaces touching this one (`docs/theory.md` §13) are crossed together: the medium
-        // beyond is decided by all their boundaries at once, not by their order along the ray.
-        let mut boundary = Boundary::of(&scene.shapes[shape_id as usize], n);
-        let mut end = i + 1;
-        if scene.touches(shape_id) {
+        let shape = &scene.shapes[shape_id as usize];
+        if !shape.bsdf.is_null() {
+            // A thin dielectric: its transmittance needs the shading normal and uv.
+            let si = scene.shadow_interaction(h);
+            tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
+        }
+        i += 1;
+        if scene.shadow_touches(shape_id, h) {
+            // Surfaces touching this one (`docs/theory.md` §14) are crossed together: the
+            // medium beyond is decided by all their boundaries at once (T40), not by their
+            // order along the ray.
+            let mut boundary = Boundary::of(shape, n);
             let slab = 2.0 * haze_core::RAY_EPSILON * (1.0 + ray.at(h.t).abs().max_element());
             let cos = ray.d.dot(n).abs();
-            while end < hits.len() && (hits[end].t - h.t) * cos <= slab {
-                let (s, n) = scene.shadow_crossing(&hits[end]);
-                boundary = boundary.with(&scene.shapes[s as usize], n);
-                end += 1;
+            while i < hits.len() && (hits[i].t - h.t) * cos <= slab {
+                let (other, n) = scene.shadow_crossing(&hits[i]);
+                let other = &scene.shapes[other as usize];
+                if !other.bsdf.is_null() {
+                    let si = scene.shadow_interaction(&hits[i]);
+                    tr *= crossing_factor(&other.bsdf, ray.d, si.ns, si.uv);
+                }
+                boundary = boundary.with(other, n);
+                i += 1;
             }
-        }
-        for h in &hits[i..end] {
-            let shape = &scene.shapes[scene.shadow_crossing(h).0 as usize];
-            if !shape.bsdf.is_null() {
-                // A thin dielectric: its transmittance needs the shading normal and uv.
-                let si = scene.shadow_interaction(h);
-                tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
-            }
+            medium = boundary.medium_towards(ray.d, medium);
+        } else {
+            medium = shape.medium_towards(ray.d, n, medium);
         }
         if tr.is_black() {
             return Rgb::ZERO;
         }
-        medium = boundary.medium_towards(ray.d, medium);
-        i = end;
     }
     if let Some(m) = medium {
         let med = scene.medium(m);

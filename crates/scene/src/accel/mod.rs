@@ -935,6 +935,11 @@ impl Accel {
         (ids.ids[lane].shape, ids.normals[lane])
     }
 
+    /// The primitive (triangle index in its mesh) of a hit from [`Self::shadow_hits`].
+    pub fn shadow_prim(&self, h: &ShadowHit) -> u32 {
+        self.leaf_ids[(h.tri / 4) as usize].ids[(h.tri % 4) as usize].prim
+    }
+
     /// Every surface the short segment `ray` (`t` in `(0, ray.t_max)`) crosses, blocking or
     /// not, up to [`MAX_PROBE_HITS`] (the rest are dropped), in no particular order: how
     /// `Scene::boundary_at` finds the surfaces that touch at a point

@@ -3,8 +3,9 @@
 //! at least one of the two declares media. A fog box resting on a floor, a smoke volume against
 //! a wall, a glass and the null boundary of the water inside it. At such a place a ray meets both
 //! surfaces at the same distance, and which one a closest-hit query returns is arbitrary; the
-//! scene resolves those hits by the rule of `docs/theory.md` §13 (`crate::coincident`), but only
-//! on the shapes marked here, so scenes without touching surfaces pay nothing.
+//! scene resolves those hits by the rule of `docs/theory.md` §14 (`crate::coincident`), but only
+//! on the faces marked here, so scenes without touching surfaces pay nothing, and hits on the
+//! other faces of a shape that touches somewhere (the top of the fog box on the floor) little.
 //!
 //! The test is conservative where it is cheap to be (a disk is taken as its bounding square) and
 //! exact enough elsewhere: two triangles touch when every vertex of each lies within
@@ -29,6 +30,8 @@ const NORMAL_TOLERANCE: f32 = 1e-2;
 #[derive(Clone, Copy, Debug)]
 struct Piece {
     shape: u32,
+    /// The triangle's index in its mesh; 0 for a disk (its hits' `prim`).
+    prim: u32,
     v: [Vec3; 3],
     n: Vec3,
 }
@@ -38,13 +41,26 @@ fn offset_scale(p: Vec3) -> f32 {
     RAY_EPSILON * (1.0 + p.abs().max_element())
 }
 
-/// Per shape: some face of it touches a face of a shape (itself included) where one of the two
-/// declares media, or (spheres) it coincides with another sphere that way.
-pub fn touching_shapes(shapes: &[Shape]) -> Vec<bool> {
-    let mut touching = vec![false; shapes.len()];
+/// Which faces touch a face of a shape (the same one included) where one of the two declares
+/// media, or (spheres) coincide with another sphere that way: per shape, per primitive (mesh
+/// triangle; one for a sphere or disk), or an empty list for a shape none of whose faces touch;
+/// no list at all when nothing touches.
+pub fn touching_faces(shapes: &[Shape]) -> Vec<Vec<bool>> {
+    let mut touching: Vec<Vec<bool>> = vec![Vec::new(); shapes.len()];
     if !shapes.iter().any(Shape::is_medium_transition) {
-        return touching;
+        return Vec::new();
     }
+    let mut mark = |shape: u32, prim: u32| {
+        let faces = &mut touching[shape as usize];
+        if faces.is_empty() {
+            let count = match &shapes[shape as usize].geometry {
+                Geometry::Mesh(m) => m.indices.len(),
+                Geometry::Sphere { .. } | Geometry::Disk { .. } => 1,
+            };
+            *faces = vec![false; count];
+        }
+        faces[prim as usize] = true;
+    };
     let pieces = planar_pieces(shapes);
     let max_coord = pieces.iter().flat_map(|p| p.v).fold(0.0f32, |m, v| m.max(v.abs().max_element()));
     let tol = 2.0 * RAY_EPSILON * (1.0 + max_coord);
@@ -75,16 +91,20 @@ pub fn touching_shapes(shapes: &[Shape]) -> Vec<bool> {
         let Some(candidates) = table.get(&key) else { continue };
         for &i in candidates {
             let p = &pieces[i as usize];
-            if i as usize == j || touching[p.shape as usize] && touching[q.shape as usize] {
-                continue;
-            }
-            if pieces_touch(p, q) {
-                touching[p.shape as usize] = true;
-                touching[q.shape as usize] = true;
+            if i as usize != j && pieces_touch(p, q) {
+                mark(p.shape, p.prim);
+                mark(q.shape, q.prim);
             }
         }
     }
-    spheres_touching(shapes, &mut touching);
+    for (i, j) in spheres_touching(shapes) {
+        mark(i, 0);
+        mark(j, 0);
+    }
+    if touching.iter().all(Vec::is_empty) {
+        // Nothing touches: the scene tests one length instead of a shape's entry per hit.
+        touching.clear();
+    }
     touching
 }
 
@@ -116,7 +136,7 @@ fn planar_pieces(shapes: &[Shape]) -> Vec<Piece> {
                 for i in 0..m.indices.len() {
                     let n = m.face_normal(i);
                     if n != Vec3::ZERO {
-                        pieces.push(Piece { shape: s as u32, v: m.vertices(i), n });
+                        pieces.push(Piece { shape: s as u32, prim: i as u32, v: m.vertices(i), n });
                     }
                 }
             }
@@ -126,7 +146,7 @@ fn planar_pieces(shapes: &[Shape]) -> Vec<Piece> {
                 for v in [[c[0], c[1], c[2]], [c[0], c[2], c[3]]] {
                     let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
                     if n != Vec3::ZERO {
-                        pieces.push(Piece { shape: s as u32, v, n });
+                        pieces.push(Piece { shape: s as u32, prim: 0, v, n });
                     }
                 }
             }
@@ -137,7 +157,8 @@ fn planar_pieces(shapes: &[Shape]) -> Vec<Piece> {
 }
 
 /// Two spheres of (nearly) the same centre and radius, one of them a medium boundary.
-fn spheres_touching(shapes: &[Shape], touching: &mut [bool]) {
+fn spheres_touching(shapes: &[Shape]) -> Vec<(u32, u32)> {
+    let mut pairs = Vec::new();
     let spheres: Vec<(usize, Vec3, f32)> = shapes
         .iter()
         .enumerate()
@@ -151,11 +172,11 @@ fn spheres_touching(shapes: &[Shape], touching: &mut [bool]) {
             let tol = 2.0 * offset_scale(ci.abs().max(cj.abs()) + Vec3::splat(ri.max(rj)));
             let transition = shapes[i].is_medium_transition() || shapes[j].is_medium_transition();
             if transition && (ci - cj).length() + (ri - rj).abs() <= tol {
-                touching[i] = true;
-                touching[j] = true;
+                pairs.push((i as u32, j as u32));
             }
         }
     }
+    pairs
 }
 
 /// Every vertex of each piece within the offset distance (twice) of the other's plane, and
@@ -226,6 +247,12 @@ mod tests {
         Shape { name: "s".into(), geometry, bsdf, interior, exterior: None, emitter: None }
     }
 
+    /// Per shape: some face touches.
+    fn touching_shapes(shapes: &[Shape]) -> Vec<bool> {
+        let faces = touching_faces(shapes);
+        (0..shapes.len()).map(|s| faces.get(s).is_some_and(|f| f.iter().any(|&t| t))).collect()
+    }
+
     fn diffuse() -> Bsdf {
         Bsdf::Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) }
     }
@@ -250,6 +277,12 @@ mod tests {
     #[test]
     fn a_fog_cube_on_the_floor_touches_it_and_a_lifted_one_does_not() {
         assert_eq!(touching_shapes(&[fog_cube(0.0), floor()]), vec![true, true]);
+        // Only the cube's two bottom triangles (normal -y), and both of the floor's.
+        let cube = fog_cube(0.0);
+        let Geometry::Mesh(m) = &cube.geometry else { unreachable!() };
+        let bottom: Vec<bool> = (0..m.indices.len()).map(|i| m.face_normal(i).y < -0.5).collect();
+        assert_eq!(bottom.iter().filter(|&&b| b).count(), 2);
+        assert_eq!(touching_faces(&[cube.clone(), floor()]), vec![bottom, vec![true, true]]);
         assert_eq!(touching_shapes(&[fog_cube(1e-3), floor()]), vec![false, false]);
         assert_eq!(touching_shapes(&[fog_cube(-1e-3), floor()]), vec![false, false]);
         // Without media nothing is looked for: the tie between two opaque surfaces is not ours.
