@@ -84,8 +84,9 @@ fn paired_z(a: &Passes, b: &Passes) -> f64 {
 }
 
 /// Relative difference of the image means below which a significant paired difference is
-/// accepted: the neighbours differ physically by 1 mm of medium (about 0.1-0.2% of these images,
-/// which the paired volpath renders resolve at z about 4), the errors this catches are 3-30%.
+/// accepted: the neighbours differ physically by 1 mm of medium (0.03-0.2% of these images, which
+/// the paired renders resolve at z up to 7: vrl's light paths are nearly the same in both), the
+/// errors this catches are 4-73% (without the rule of docs/theory.md §14).
 const MEAN_TOLERANCE: f64 = 0.005;
 
 /// The methods of the comparison.
@@ -153,8 +154,8 @@ fn fog_cube_on_a_floor_renders_as_lifted_and_lowered() {
         "fog on floor",
         &[("flush", scene("0.5"))],
         &[("lifted 1 mm", scene("0.501")), ("lowered 1 mm", scene("0.499"))],
-        64,
-        60,
+        32,
+        40,
     );
 }
 
@@ -165,8 +166,8 @@ fn fog_cube_against_a_wall_renders_as_its_neighbours() {
         "fog against wall",
         &[("flush", scene("0.5"))],
         &[("1 mm gap", scene("0.499")), ("wall 1 mm in", scene("0.501"))],
-        64,
-        60,
+        32,
+        40,
     );
 }
 
@@ -177,8 +178,8 @@ fn medium_bounded_by_its_glass_renders_as_its_neighbours() {
         "medium in glass",
         &[("flush", scene("0.5"))],
         &[("1 mm inside", scene("0.499")), ("1 mm outside", scene("0.501"))],
-        64,
-        60,
+        32,
+        40,
     );
 }
 
@@ -194,7 +195,7 @@ fn camera_on_a_medium_boundary_renders_as_its_neighbours() {
         "camera on boundary",
         &[("declaring vacuum", scene("1", None)), ("declaring fog", scene("1", Some(0)))],
         &[("1 mm outside", scene("1.001", None)), ("1 mm inside", scene("0.999", Some(0)))],
-        64,
-        60,
+        32,
+        40,
     );
 }
