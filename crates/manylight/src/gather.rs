@@ -284,7 +284,7 @@ fn walk(
             st.beta *= bs.weight * candidates as f32;
             st.surface_seen = true;
             let d = frame.to_world(bs.wo);
-            st.medium = shape.medium_towards(d, h.n, st.medium);
+            st.medium = scene.medium_towards(&h, d, st.medium);
             st.ray = Ray::new(offset_origin(h.p, h.n, d), d);
         }
         chain.clear();
@@ -304,11 +304,10 @@ fn walk(
 
 /// The walk after the delta sample `bs` at `h` (frame `frame`) of the state `st`.
 fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample, scene: &Scene) -> Walk {
-    let shape = &scene.shapes[h.shape as usize];
     let d = frame.to_world(bs.wo);
     Walk {
         ray: Ray::new(offset_origin(h.p, h.n, d), d),
-        medium: shape.medium_towards(d, h.n, st.medium),
+        medium: scene.medium_towards(h, d, st.medium),
         beta: st.beta * bs.weight,
         events: st.events + !bs.null as u32,
         surface_seen: true,
@@ -380,7 +379,7 @@ fn walk_chain(
             }
         }
         let shape = &scene.shapes[h.shape as usize];
-        if shape.cross_if_null(h.p, h.n, &mut st.ray, &mut st.medium) {
+        if scene.cross_if_null(&h, &mut st.ray, &mut st.medium) {
             continue;
         }
         if shape.bsdf.is_black() || st.beta.is_black() {

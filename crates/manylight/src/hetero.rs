@@ -354,7 +354,7 @@ pub(crate) fn surface_vpl_to_segment(
                 return Rgb::ZERO;
             }
             let d = v / dist;
-            let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+            let medium = scene.medium_leaving(vpl.shape, vpl.p, vpl.n, d, vpl.medium);
             transmittance_to_sampled(scene, vpl.p, Some(vpl.n), d, dist, medium, s)
         },
     )

@@ -369,7 +369,7 @@ fn trace_one(
         }
         let Some(h) = hit else { return };
         let shape = &scene.shapes[h.shape as usize];
-        if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
+        if scene.cross_if_null(&h, &mut ray, &mut medium) {
             continue;
         }
         if shape.bsdf.is_black() {
@@ -395,7 +395,7 @@ fn trace_one(
         // Adjoint transport: undo the radiance-only 1/eta^2 factor of refraction.
         t *= bs.weight * (bs.eta * bs.eta);
         let d = frame.to_world(bs.wo);
-        medium = shape.medium_towards(d, h.n, medium);
+        medium = scene.medium_towards(&h, d, medium);
         after_surface = true;
         // A thin sheet's straight transmission (`null` sample) is no event (crate::depth).
         if !bs.null {

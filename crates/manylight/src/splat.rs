@@ -367,7 +367,7 @@ impl CausticTracer {
             }
             let Some(h) = hit else { return };
             let shape = &scene.shapes[h.shape as usize];
-            if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
+            if scene.cross_if_null(&h, &mut ray, &mut medium) {
                 continue;
             }
             if shape.bsdf.is_black() || beta.is_black() {
@@ -406,7 +406,7 @@ impl CausticTracer {
             // Adjoint transport, as in light tracing: the radiance-only 1/eta^2 is undone.
             beta *= bs.weight * (bs.eta * bs.eta);
             let d = frame.to_world(bs.wo);
-            medium = shape.medium_towards(d, h.n, medium);
+            medium = scene.medium_towards(&h, d, medium);
             ray = Ray::new(offset_origin(h.p, h.n, d), d);
         }
     }
@@ -656,7 +656,7 @@ impl View {
         if intensity.is_black() {
             return None;
         }
-        let medium = shape.medium_towards(wc, vpl.n, vpl.medium);
+        let medium = scene.medium_leaving(vpl.shape, vpl.p, vpl.n, wc, vpl.medium);
         let tr = transmittance_to(scene, vpl.p, Some(vpl.n), wc, d * (1.0 - pr.near), medium);
         if tr.is_black() {
             return None;

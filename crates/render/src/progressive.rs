@@ -162,7 +162,8 @@ pub fn render<I: Integrator>(
                         // The reconstruction filter by importance sampling (see `PixelFilter`).
                         let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
                         let ray = rays.generate(pos);
-                        let mut r = integrator.radiance(scene, data, ray, cam.medium, &mut sampler);
+                        let medium = scene.camera_medium(&ray, cam.medium);
+                        let mut r = integrator.radiance(scene, data, ray, medium, &mut sampler);
                         r.add(Component::Surface, integrator.pixel_light(data, pixel));
                         if !r.total().is_finite() {
                             invalid.fetch_add(1, Ordering::Relaxed);

@@ -5,6 +5,7 @@
 //! `to_world`, ...), so a reader who knows a scene file finds the code that handles it.
 
 pub mod accel;
+pub mod boundary;
 pub mod bsdf;
 pub mod camera;
 pub mod emitter;
@@ -21,6 +22,7 @@ pub mod vdb;
 pub mod volume;
 pub mod xml;
 
+pub use boundary::Boundary;
 pub use bsdf::Bsdf;
 pub use camera::Camera;
 pub use emitter::Emitter;

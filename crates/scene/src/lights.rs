@@ -387,9 +387,10 @@ impl Scene {
         let mut ray = haze_core::Ray::new(p, d);
         for _ in 0..1024 {
             let h = self.intersect(&ray)?;
-            let s = &self.shapes[h.shape as usize];
-            if s.is_medium_transition() {
-                return if d.dot(h.n) > 0.0 { s.interior } else { s.exterior };
+            // The medium on the side the ray comes from, of every boundary touching the hit.
+            let b = self.boundary_at(h.shape, h.p, h.n);
+            if b.is_transition() {
+                return b.medium_towards(-d, None);
             }
             ray = haze_core::Ray::new(haze_core::ray::offset_origin(h.p, h.n, d), d);
         }

@@ -73,7 +73,7 @@ pub struct Scene {
     pub media: Vec<Medium>,
     pub emitters: Vec<Emitter>,
     pub(crate) emitter_tables: EmitterTables,
-    accel: Accel,
+    pub(crate) accel: Accel,
     /// The film grid of leaf lists that answers camera rays ([`Self::intersect_camera`]), built
     /// before a render's first pass ([`Self::prepare_camera_grid`]) or else on the first camera
     /// ray. It answers any ray from its pinhole correctly, so a camera
@@ -94,6 +94,14 @@ pub struct Scene {
     /// Per shape: the sides of its faces from which it cannot be hit again
     /// ([`convex::clear_sides`]; none for analytic shapes, which the BVH does not hold).
     clear: Vec<ClearSides>,
+    /// Per shape, per primitive: the face touches a medium boundary (`shape::coincident`), so
+    /// its hits are settled by `Scene::resolve_hit` (`boundary.rs`, `docs/theory.md` §14); an
+    /// empty list when no face of the shape does.
+    pub(crate) touching: Vec<Vec<bool>>,
+    /// Some shape declares media.
+    pub(crate) any_transition: bool,
+    /// The camera's pinhole and the medium boundaries through it (`Scene::camera_medium`).
+    pub(crate) camera_boundary: OnceLock<(Vec3, crate::boundary::Boundary)>,
 }
 
 /// [`Scene::sealed`]: a shape is sealed when it is a closed surface
@@ -167,6 +175,8 @@ impl Scene {
                 _ => ClearSides::default(),
             })
             .collect();
+        let touching = crate::shape::coincident::touching_faces(&shapes);
+        let any_transition = shapes.iter().any(Shape::is_medium_transition);
         Scene {
             emitter_tables,
             path,
@@ -184,6 +194,9 @@ impl Scene {
             sealed,
             sealed_media,
             clear,
+            touching,
+            any_transition,
+            camera_boundary: OnceLock::new(),
         }
     }
 
@@ -246,9 +259,10 @@ impl Scene {
         self.every_emitter_delta
     }
 
-    /// Closest hit with `t` in `(0, ray.t_max)`.
+    /// Closest hit with `t` in `(0, ray.t_max)`, settled against the surfaces touching it
+    /// ([`Self::resolve_hit`]).
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
-        self.accel.intersect(&self.shapes, ray)
+        self.accel.intersect(&self.shapes, ray).map(|h| self.resolve_hit(h))
     }
 
     /// The closest hit of [`Self::intersect`] with only its distance computed
@@ -285,10 +299,11 @@ impl Scene {
         self.camera_grid.get_or_init(|| CameraGrid::build(&self.accel, &self.camera, parallel));
     }
 
-    /// The surface interaction of a hit from [`Self::intersect_preliminary`].
+    /// The surface interaction of a hit from [`Self::intersect_preliminary`], settled against
+    /// the surfaces touching it ([`Self::resolve_hit`]).
     #[inline]
     pub fn interaction(&self, hit: &PreliminaryHit) -> SurfaceInteraction {
-        self.accel.interaction(&self.shapes, hit)
+        self.resolve_hit(self.accel.interaction(&self.shapes, hit))
     }
 
     /// True if anything blocks `ray` before `ray.t_max`.

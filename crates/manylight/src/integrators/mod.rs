@@ -101,7 +101,7 @@ pub(crate) fn connect_surface(scene: &Scene, vpl: &crate::vpl::SurfaceVpl, x: gl
         return haze_core::Rgb::ZERO;
     }
     let d = v / dist;
-    let medium = scene.shapes[vpl.shape as usize].medium_towards(d, vpl.n, vpl.medium);
+    let medium = scene.medium_leaving(vpl.shape, vpl.p, vpl.n, d, vpl.medium);
     transmittance_to(scene, vpl.p, Some(vpl.n), d, dist, medium)
 }
 

@@ -5,7 +5,7 @@ use haze_core::ray::offset_origin;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::accel::{Leaving, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
-use haze_scene::{Bsdf, MediumId, Scene};
+use haze_scene::{Boundary, Bsdf, MediumId, Scene};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
 /// occluder: `t_max = |y - o| (1 - SHADOW_EPSILON)`. haze has used `1e-4` since the first
@@ -152,7 +152,9 @@ fn transmittance_impl(
     let mut tau = Rgb::ZERO;
     let mut tr = Rgb::ONE;
     let mut last = 0.0f32;
-    for h in hits.iter() {
+    let mut i = 0;
+    while i < hits.len() {
+        let h = &hits[i];
         if let Some(m) = medium {
             let med = scene.medium(m);
             match &med.hetero {
@@ -161,17 +163,38 @@ fn transmittance_impl(
             }
         }
         last = h.t;
-        let (shape, n) = scene.shadow_crossing(h);
-        let shape = &scene.shapes[shape as usize];
+        let (shape_id, n) = scene.shadow_crossing(h);
+        let shape = &scene.shapes[shape_id as usize];
         if !shape.bsdf.is_null() {
             // A thin dielectric: its transmittance needs the shading normal and uv.
             let si = scene.shadow_interaction(h);
             tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
         }
+        i += 1;
+        if scene.shadow_touches(shape_id, h) {
+            // Surfaces touching this one (`docs/theory.md` §14) are crossed together: the
+            // medium beyond is decided by all their boundaries at once (T40), not by their
+            // order along the ray.
+            let mut boundary = Boundary::of(shape, n);
+            let slab = 2.0 * haze_core::RAY_EPSILON * (1.0 + ray.at(h.t).abs().max_element());
+            let cos = ray.d.dot(n).abs();
+            while i < hits.len() && (hits[i].t - h.t) * cos <= slab {
+                let (other, n) = scene.shadow_crossing(&hits[i]);
+                let other = &scene.shapes[other as usize];
+                if !other.bsdf.is_null() {
+                    let si = scene.shadow_interaction(&hits[i]);
+                    tr *= crossing_factor(&other.bsdf, ray.d, si.ns, si.uv);
+                }
+                boundary = boundary.with(other, n);
+                i += 1;
+            }
+            medium = boundary.medium_towards(ray.d, medium);
+        } else {
+            medium = shape.medium_towards(ray.d, n, medium);
+        }
         if tr.is_black() {
             return Rgb::ZERO;
         }
-        medium = shape.medium_towards(ray.d, n, medium);
     }
     if let Some(m) = medium {
         let med = scene.medium(m);
@@ -270,7 +293,7 @@ pub fn surface_nee(
         h.n,
         es.wi,
         es.dist,
-        shape.medium_towards(es.wi, h.n, medium),
+        scene.medium_towards(h, es.wi, medium),
         sampler,
     );
     if tr.is_black() {
@@ -328,7 +351,7 @@ fn transmittance_segments(
         if tr.is_black() {
             return Rgb::ZERO;
         }
-        medium = shape.medium_towards(ray.d, h.n, medium);
+        medium = scene.medium_towards(&h, ray.d, medium);
         origin = offset_origin(h.p, h.n, ray.d);
     }
     // A ray that keeps hitting null surfaces 256 times is caught in degenerate geometry.

@@ -235,7 +235,7 @@ impl Integrator for VolPath {
             }
 
             let shape = &scene.shapes[h.shape as usize];
-            if shape.cross_if_null(h.p, h.n, &mut ray, &mut medium) {
+            if scene.cross_if_null(&h, &mut ray, &mut medium) {
                 leaving = scene.leaving(h.shape, h.n, ray.d);
                 continue;
             }
@@ -254,7 +254,7 @@ impl Integrator for VolPath {
 
             let frame = Frame::from_normal(h.ns);
             let wi = frame.to_local(-ray.d);
-            let medium_towards = |d: glam::Vec3| shape.medium_towards(d, h.n, medium);
+            let medium_towards = |d: glam::Vec3| scene.medium_towards(&h, d, medium);
 
             if !shape.bsdf.is_specular() && depth + 1 < max_depth {
                 let direct = surface_nee(scene, sampler, &h, &frame, wi, medium, SurfaceMis::PowerHeuristic);

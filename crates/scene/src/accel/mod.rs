@@ -126,6 +126,29 @@ impl Leaving {
     }
 }
 
+/// Most surfaces [`Accel::probe`] collects.
+pub const MAX_PROBE_HITS: usize = 8;
+
+/// A surface crossed by [`Accel::probe`]'s segment: its distance, shape and geometric normal,
+/// and the hit for [`Accel::interaction`].
+#[derive(Clone, Copy, Debug)]
+pub struct ProbeHit {
+    pub t: f32,
+    pub shape: u32,
+    pub n: Vec3,
+    pub hit: PreliminaryHit,
+}
+
+impl ProbeHit {
+    /// A placeholder for the slots of an output array.
+    pub const EMPTY: ProbeHit = ProbeHit {
+        t: 0.0,
+        shape: 0,
+        n: Vec3::ZERO,
+        hit: PreliminaryHit(Hit::Triangle { leaf: 0, lane: 0, t: 0.0, b1: 0.0, b2: 0.0 }),
+    };
+}
+
 /// Most pass-through surfaces [`Accel::shadow_hits`] collects before it gives up.
 pub const MAX_SHADOW_HITS: usize = 8;
 
@@ -212,6 +235,38 @@ fn pull_inside(p: Vec3, v: [Vec3; 3]) -> Vec3 {
         p + to_centroid * (step / len).min(0.5)
     } else {
         p
+    }
+}
+
+/// The hit of the analytic shape `a` in `(0, ray.t_max)`, with its interaction.
+#[inline(always)]
+fn analytic_hit(a: &Analytic, ray: &Ray) -> Option<PreliminaryHit> {
+    match a {
+        Analytic::Sphere { shape, center, radius, flip } => {
+            let t = intersect_sphere(ray, *center, *radius)?;
+            let p = ray.at(t);
+            let n = (p - *center).normalize();
+            let n = if *flip { -n } else { n };
+            let phi = n.z.atan2(n.x);
+            let uv = Vec2::new(
+                phi * 0.5 * haze_core::INV_PI + 0.5,
+                n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI,
+            );
+            Some(PreliminaryHit(Hit::Done(SurfaceInteraction { t, p, n, ns: n, uv, shape: *shape, prim: 0 })))
+        }
+        Analytic::Disk { shape, to_world, inv, normal } => {
+            let (t, local) = intersect_disk(ray, to_world, inv)?;
+            let uv = Vec2::new(local.length(), local.y.atan2(local.x) * 0.5 * haze_core::INV_PI + 0.5);
+            Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
+                t,
+                p: ray.at(t),
+                n: *normal,
+                ns: *normal,
+                uv,
+                shape: *shape,
+                prim: 0,
+            })))
+        }
     }
 }
 
@@ -670,46 +725,9 @@ impl Accel {
         mut best: Option<PreliminaryHit>,
     ) -> Option<PreliminaryHit> {
         for a in &self.analytic {
-            let r = Ray { t_max, ..*ray };
-            match a {
-                Analytic::Sphere { shape, center, radius, flip } => {
-                    if let Some(t) = intersect_sphere(&r, *center, *radius) {
-                        t_max = t;
-                        let p = ray.at(t);
-                        let n = (p - *center).normalize();
-                        let n = if *flip { -n } else { n };
-                        let phi = n.z.atan2(n.x);
-                        let uv = Vec2::new(
-                            phi * 0.5 * haze_core::INV_PI + 0.5,
-                            n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI,
-                        );
-                        best = Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
-                            t,
-                            p,
-                            n,
-                            ns: n,
-                            uv,
-                            shape: *shape,
-                            prim: 0,
-                        })));
-                    }
-                }
-                Analytic::Disk { shape, to_world, inv, normal } => {
-                    if let Some((t, local)) = intersect_disk(&r, to_world, inv) {
-                        t_max = t;
-                        let uv =
-                            Vec2::new(local.length(), local.y.atan2(local.x) * 0.5 * haze_core::INV_PI + 0.5);
-                        best = Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
-                            t,
-                            p: ray.at(t),
-                            n: *normal,
-                            ns: *normal,
-                            uv,
-                            shape: *shape,
-                            prim: 0,
-                        })));
-                    }
-                }
+            if let Some(h) = analytic_hit(a, &Ray { t_max, ..*ray }) {
+                t_max = h.t();
+                best = Some(h);
             }
         }
         best
@@ -915,6 +933,74 @@ impl Accel {
         let ids = &self.leaf_ids[(h.tri / 4) as usize];
         let lane = (h.tri % 4) as usize;
         (ids.ids[lane].shape, ids.normals[lane])
+    }
+
+    /// The primitive (triangle index in its mesh) of a hit from [`Self::shadow_hits`].
+    pub fn shadow_prim(&self, h: &ShadowHit) -> u32 {
+        self.leaf_ids[(h.tri / 4) as usize].ids[(h.tri % 4) as usize].prim
+    }
+
+    /// Every surface the short segment `ray` (`t` in `(0, ray.t_max)`) crosses, blocking or
+    /// not, up to [`MAX_PROBE_HITS`] (the rest are dropped), in no particular order: how
+    /// `Scene::boundary_at` finds the surfaces that touch at a point
+    /// (`crate::coincident`). Returns how many were stored.
+    pub fn probe(&self, ray: &Ray, out: &mut [ProbeHit; MAX_PROBE_HITS]) -> usize {
+        with_kernel!(self, k => self.probe_with(k, ray, out))
+    }
+
+    #[inline(always)]
+    fn probe_with<K: NodeTest>(&self, kernel: K, ray: &Ray, out: &mut [ProbeHit; MAX_PROBE_HITS]) -> usize {
+        let mut n = 0usize;
+        if let Some(bvh) = &self.bvh {
+            let o: Vec3A = ray.o.into();
+            let d: Vec3A = ray.d.into();
+            let mut wt: Option<WatertightRay> = None;
+            self.traverse::<false, K>(
+                kernel,
+                &bvh.all,
+                o - d * ORIGIN_BACKOFF,
+                d,
+                shifted(ray.t_max),
+                Leaving::NONE,
+                #[inline(always)]
+                |index, leaf, shifted_max| {
+                    let wt = wt.get_or_insert_with(|| WatertightRay::new(o, d));
+                    let found = wt.intersect_packet(&leaf.packet, T_MIN, ray.t_max);
+                    let mut m = found.mask;
+                    while m != 0 && n < MAX_PROBE_HITS {
+                        let lane = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let (b1, b2) = found.barycentrics(lane);
+                        let ids = &self.leaf_ids[index as usize];
+                        out[n] = ProbeHit {
+                            t: found.t[lane],
+                            shape: ids.ids[lane].shape,
+                            n: ids.normals[lane],
+                            hit: PreliminaryHit(Hit::Triangle {
+                                leaf: index,
+                                lane: lane as u32,
+                                t: found.t[lane],
+                                b1,
+                                b2,
+                            }),
+                        };
+                        n += 1;
+                    }
+                    (n < MAX_PROBE_HITS).then_some(shifted_max)
+                },
+            );
+        }
+        for a in &self.analytic {
+            if n == MAX_PROBE_HITS {
+                break;
+            }
+            if let Some(h) = analytic_hit(a, ray) {
+                let Hit::Done(si) = h.0 else { unreachable!("analytic hits come with their interaction") };
+                out[n] = ProbeHit { t: si.t, shape: si.shape, n: si.n, hit: h };
+                n += 1;
+            }
+        }
+        n
     }
 }
 

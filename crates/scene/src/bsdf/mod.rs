@@ -163,6 +163,18 @@ impl Bsdf {
         }
     }
 
+    /// True if a sampled direction may leave on the other side of the surface than the one
+    /// the path arrived from (a refraction or a straight pass): `null` and the dielectrics.
+    pub fn transmits(&self) -> bool {
+        match self {
+            Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } | Bsdf::RoughDielectric(_) => {
+                true
+            }
+            Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) => false,
+            Bsdf::TwoSided(b) => b.transmits(),
+        }
+    }
+
     /// True if [`Self::eval`] is zero unless `wi` and `wo` both lie on the front side
     /// (`z > 0`): `diffuse`, `plastic` and `roughplastic` (each checks exactly that first).
     pub fn front_only(&self) -> bool {

@@ -3,6 +3,7 @@
 
 pub mod analytic;
 pub mod closed;
+pub mod coincident;
 pub mod convex;
 mod mesh;
 mod primitives;
@@ -15,8 +16,6 @@ pub use sample::{AreaSampler, SurfaceSample};
 use crate::bsdf::Bsdf;
 use crate::medium::MediumId;
 use glam::{Mat4, Vec3};
-use haze_core::ray::offset_origin;
-use haze_core::Ray;
 
 /// Geometry of a shape, in world space.
 #[derive(Clone, Debug)]
@@ -65,7 +64,8 @@ impl Shape {
 
     /// Medium a ray enters when it leaves this shape's surface in direction `d` (geometric normal
     /// `n`): the exterior medium on the side `n` points to, the interior one on the other side,
-    /// or `current` unchanged if the shape declares no media.
+    /// or `current` unchanged if the shape declares no media. This shape alone: walks ask the
+    /// scene (`Scene::medium_towards`), which also weighs the surfaces touching it.
     pub fn medium_towards(
         &self,
         d: glam::Vec3,
@@ -79,19 +79,5 @@ impl Shape {
         } else {
             self.interior
         }
-    }
-
-    /// A walk's step through this shape where its BSDF is `null` (a boundary that only changes
-    /// the medium, not a scattering event): `ray` goes on in the same direction from just past
-    /// the hit point `p` (geometric normal `n`), in the medium beyond. Returns false, changing
-    /// nothing, for any other BSDF. The one step of volpath, the many-light camera walk and
-    /// light tracing.
-    pub fn cross_if_null(&self, p: Vec3, n: Vec3, ray: &mut Ray, medium: &mut Option<MediumId>) -> bool {
-        if !self.bsdf.is_null() {
-            return false;
-        }
-        *medium = self.medium_towards(ray.d, n, *medium);
-        *ray = Ray::new(offset_origin(p, n, ray.d), ray.d);
-        true
     }
 }
