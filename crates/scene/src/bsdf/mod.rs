@@ -1,5 +1,6 @@
 //! Surface scattering models: Mitsuba 3's BSDF plugins `null`, `diffuse`, `dielectric`,
-//! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic` and `twosided`, one file each,
+//! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic`, `twosided`, `conductor` and
+//! `roughconductor`, one file each,
 //! with the microfacet distributions they share in [`microfacet`].
 //!
 //! Local shading frame: `z` is the shading normal. `wi` points *away* from the surface towards
@@ -7,6 +8,7 @@
 //! Mitsuba and pbrt. `uv` is the surface parameterisation of the hit, for textured parameters.
 //! Values include the cosine factor only where said.
 
+mod conductor;
 mod dielectric;
 pub mod microfacet;
 mod plastic;
@@ -15,6 +17,7 @@ mod roughplastic;
 mod thindielectric;
 mod twosided;
 
+pub use conductor::{conductor_ior, fresnel_conductor, Conductor, CONDUCTOR_IORS};
 pub use dielectric::fresnel_dielectric;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
@@ -45,6 +48,8 @@ pub enum Bsdf {
     RoughPlastic(Box<RoughPlastic>),
     /// The nested BSDF on both sides: back-facing `wi` see it mirrored through the surface.
     TwoSided(Box<Bsdf>),
+    /// A smooth (`conductor`) or rough (`roughconductor`) metal, front side only.
+    Conductor(Box<Conductor>),
 }
 
 /// A sampled outgoing direction.
@@ -111,6 +116,7 @@ impl Bsdf {
     pub fn is_specular(&self) -> bool {
         match self {
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Conductor(c) => c.distr.is_none(),
             Bsdf::TwoSided(b) => b.is_specular(),
             _ => false,
         }
@@ -146,6 +152,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::RoughPlastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv, with_pdf),
+            Bsdf::Conductor(c) => c.sample(wi, u2, uv),
         }
     }
 
@@ -159,14 +166,16 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.eval(wi, wo, uv),
             Bsdf::RoughPlastic(b) => b.eval(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval(b, wi, wo, uv),
+            Bsdf::Conductor(c) => c.eval(wi, wo, uv),
             _ => Rgb::ZERO,
         }
     }
 
     /// True if [`Self::eval`] is zero unless `wi` and `wo` both lie on the front side
-    /// (`z > 0`): `diffuse`, `plastic` and `roughplastic` (each checks exactly that first).
+    /// (`z > 0`): `diffuse`, `plastic`, `roughplastic` and the conductors (each checks exactly
+    /// that first).
     pub fn front_only(&self) -> bool {
-        matches!(self, Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_))
+        matches!(self, Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) | Bsdf::Conductor(_))
     }
 
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
@@ -178,6 +187,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.pdf(wi, wo),
             Bsdf::RoughPlastic(b) => b.pdf(wi, wo),
             Bsdf::TwoSided(b) => twosided::pdf(b, wi, wo, uv),
+            Bsdf::Conductor(c) => c.pdf(wi, wo),
             _ => 0.0,
         }
     }
