@@ -6,7 +6,7 @@
 //! interpolates the four texels around `uv * size - 1/2`; `nearest` takes texel
 //! `floor(uv * size)`. Indices outside the image wrap: `repeat` (modulo the size), `mirror`
 //! (reflected at each edge, period twice the size), `clamp` (to the edge texel).
-//! 8- and 16-bit images (PNG, JPEG) are sRGB-encoded and decoded to linear at load unless
+//! 8- and 16-bit images (PNG, JPEG, BMP) are sRGB-encoded and decoded to linear at load unless
 //! `raw` (Mitsuba 3's RGB variants; OpenEXR and Radiance HDR images are linear already).
 
 use glam::{Affine2, Vec2};
@@ -107,7 +107,7 @@ impl Bitmap {
         Ok(Bitmap { width, height, texels, filter, wrap, to_uv, mean, range })
     }
 
-    /// Reads `path`: PNG or JPEG (8 or 16 bits; sRGB-decoded unless `raw`), OpenEXR or
+    /// Reads `path`: PNG, JPEG or BMP (8 or 16 bits; sRGB-decoded unless `raw`), OpenEXR or
     /// Radiance HDR (linear). Grey images give grey texels; alpha is dropped.
     pub fn load(
         path: &Path,
@@ -126,14 +126,14 @@ impl Bitmap {
                 let (w, h, rgb) = crate::envmap::read_hdr(path)?;
                 (w, h, rgb, false)
             }
-            "png" | "jpg" | "jpeg" => {
+            "png" | "jpg" | "jpeg" | "bmp" => {
                 let img = image::open(path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
                 let rgb = img.into_rgb32f();
                 (rgb.width() as usize, rgb.height() as usize, rgb.into_raw(), true)
             }
             _ => {
                 return Err(format!(
-                    "unsupported image format '{}' (haze reads .png, .jpg, .exr and .hdr)",
+                    "unsupported image format '{}' (haze reads .png, .jpg, .bmp, .exr and .hdr)",
                     path.display()
                 ))
             }
@@ -263,6 +263,27 @@ mod tests {
             }
         });
         img.save(&path).unwrap();
+        // The same pixels as JPEG (lossy: only roughly) and BMP (exactly).
+        img.save(dir.join("t.bmp")).unwrap();
+        let bmp =
+            Bitmap::load(&dir.join("t.bmp"), false, FilterType::Nearest, WrapMode::Repeat, Affine2::IDENTITY)
+                .unwrap();
+        assert_eq!(
+            bmp.eval(Vec2::new(0.25, 0.5)),
+            Bitmap::load(&path, false, FilterType::Nearest, WrapMode::Repeat, Affine2::IDENTITY)
+                .unwrap()
+                .eval(Vec2::new(0.25, 0.5))
+        );
+        image::RgbImage::from_pixel(8, 8, image::Rgb([200, 100, 50])).save(dir.join("t.jpg")).unwrap();
+        let jpg =
+            Bitmap::load(&dir.join("t.jpg"), false, FilterType::Nearest, WrapMode::Repeat, Affine2::IDENTITY)
+                .unwrap();
+        let v = jpg.eval(Vec2::splat(0.5));
+        assert!(
+            (v[0] - srgb_to_linear(200.0 / 255.0)).abs() < 0.02
+                && (v[2] - srgb_to_linear(50.0 / 255.0)).abs() < 0.02,
+            "{v:?}"
+        );
         let b = Bitmap::load(&path, false, FilterType::Nearest, WrapMode::Repeat, Affine2::IDENTITY).unwrap();
         let v = b.eval(Vec2::new(0.25, 0.5));
         assert!(
