@@ -345,3 +345,28 @@ fn cylinders_are_open_tubes_around_their_axis() {
     let e = error(&format!(r#"{SENSOR}<shape type="cylinder"><float name="radius" value="0"/></shape>"#));
     assert!(e.message.contains("'radius' must be > 0"), "{e}");
 }
+
+#[test]
+fn masks_wrap_one_bsdf_with_an_opacity() {
+    let Ok(haze_scene::Bsdf::Mask(m)) = bsdf_of(
+        r#"<bsdf type="mask"><float name="opacity" value="0.25"/><bsdf type="roughconductor"/></bsdf>"#,
+    ) else {
+        panic!("a mask")
+    };
+    assert_eq!(m.alpha(glam::Vec2::ZERO), 0.25);
+    assert!(matches!(*m.nested, haze_scene::Bsdf::Conductor(_)));
+    let Ok(haze_scene::Bsdf::Mask(m)) = bsdf_of(r#"<bsdf type="mask"><bsdf type="diffuse"/></bsdf>"#) else {
+        panic!("a mask")
+    };
+    assert_eq!(m.alpha(glam::Vec2::ZERO), 0.5, "Mitsuba's default opacity");
+    for (xml, want) in [
+        (r#"<bsdf type="mask"/>"#, "a mask needs one nested or referenced <bsdf>"),
+        (
+            r#"<bsdf type="mask"><float name="opacity" value="1.5"/><bsdf type="diffuse"/></bsdf>"#,
+            "'opacity' must lie in [0, 1]",
+        ),
+    ] {
+        let e = bsdf_of(xml).err().unwrap_or_else(|| panic!("{xml} loaded"));
+        assert!(e.message.contains(want), "{xml}: {e}");
+    }
+}

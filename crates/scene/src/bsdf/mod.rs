@@ -1,6 +1,6 @@
 //! Surface scattering models: Mitsuba 3's BSDF plugins `null`, `diffuse`, `dielectric`,
 //! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic`, `twosided`, `conductor` and
-//! `roughconductor`, one file each,
+//! `roughconductor`, and `mask`, one file each,
 //! with the microfacet distributions they share in [`microfacet`].
 //!
 //! Local shading frame: `z` is the shading normal. `wi` points *away* from the surface towards
@@ -10,6 +10,7 @@
 
 mod conductor;
 mod dielectric;
+mod mask;
 pub mod microfacet;
 mod plastic;
 mod roughdielectric;
@@ -19,6 +20,7 @@ mod twosided;
 
 pub use conductor::{conductor_ior, fresnel_conductor, Conductor, CONDUCTOR_IORS};
 pub use dielectric::fresnel_dielectric;
+pub use mask::Mask;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 pub use roughdielectric::RoughDielectric;
@@ -50,6 +52,8 @@ pub enum Bsdf {
     TwoSided(Box<Bsdf>),
     /// A smooth (`conductor`) or rough (`roughconductor`) metal, front side only.
     Conductor(Box<Conductor>),
+    /// The nested BSDF with probability `opacity`, else straight through (`mask`).
+    Mask(Box<Mask>),
 }
 
 /// A sampled outgoing direction.
@@ -96,7 +100,7 @@ impl Bsdf {
     /// depth): `null` and `thindielectric`'s transmission.
     pub fn may_pass_through(&self) -> bool {
         match self {
-            Bsdf::Null | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Null | Bsdf::ThinDielectric { .. } | Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.may_pass_through(),
             _ => false,
         }
@@ -117,6 +121,7 @@ impl Bsdf {
         match self {
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => true,
             Bsdf::Conductor(c) => c.distr.is_none(),
+            Bsdf::Mask(m) => m.nested.is_specular(),
             Bsdf::TwoSided(b) => b.is_specular(),
             _ => false,
         }
@@ -153,6 +158,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv, with_pdf),
             Bsdf::Conductor(c) => c.sample(wi, u2, uv),
+            Bsdf::Mask(m) => m.sample(wi, u1, u2, uv, with_pdf),
         }
     }
 
@@ -167,6 +173,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.eval(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval(b, wi, wo, uv),
             Bsdf::Conductor(c) => c.eval(wi, wo, uv),
+            Bsdf::Mask(m) => m.eval(wi, wo, uv),
             _ => Rgb::ZERO,
         }
     }
@@ -176,6 +183,7 @@ impl Bsdf {
     /// that first).
     pub fn front_only(&self) -> bool {
         matches!(self, Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) | Bsdf::Conductor(_))
+            || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
     }
 
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
@@ -188,6 +196,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.pdf(wi, wo),
             Bsdf::TwoSided(b) => twosided::pdf(b, wi, wo, uv),
             Bsdf::Conductor(c) => c.pdf(wi, wo),
+            Bsdf::Mask(m) => m.pdf(wi, wo, uv),
             _ => 0.0,
         }
     }
@@ -200,6 +209,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::RoughPlastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval_pdf(b, wi, wo, uv),
+            Bsdf::Mask(m) => m.eval_pdf(wi, wo, uv),
             _ => (self.eval(wi, wo, uv), self.pdf(wi, wo, uv)),
         }
     }
@@ -210,20 +220,18 @@ impl Bsdf {
     /// True if [`Self::null_transmission`] can be non-zero (shadow rays cross the surface).
     pub fn transmits_null(&self) -> bool {
         match self {
-            Bsdf::Null | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Null | Bsdf::ThinDielectric { .. } | Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.transmits_null(),
             _ => false,
         }
     }
 
-    // `uv` belongs to the interface (a textured thin sheet would use it); today only `twosided`
-    // passes it on.
-    #[allow(clippy::only_used_in_recursion)]
     pub fn null_transmission(&self, wi: Vec3, uv: Vec2) -> Rgb {
         match self {
             Bsdf::Null => Rgb::ONE,
             Bsdf::ThinDielectric { eta } => Rgb::splat(1.0 - thindielectric::reflectance(*eta, wi.z)),
             Bsdf::TwoSided(b) => b.null_transmission(twosided::front(wi), uv),
+            Bsdf::Mask(m) => Rgb::splat(1.0 - m.alpha(uv)),
             _ => Rgb::ZERO,
         }
     }

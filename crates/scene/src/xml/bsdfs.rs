@@ -1,11 +1,11 @@
 //! BSDF plugins `null`, `diffuse`, `dielectric`, `thindielectric`, `roughdielectric`,
-//! `plastic`, `roughplastic`, `twosided`, `conductor` and `roughconductor`, and Mitsuba 3's table
+//! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor` and `mask`, and Mitsuba 3's table
 //! of named indices of refraction.
 
 use super::params::Params;
 use super::{textures, LoadError};
 use crate::bsdf::{
-    conductor_ior, Bsdf, Conductor, Microfacet, MicrofacetType, Plastic, RoughDielectric, RoughPlastic,
+    conductor_ior, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, Plastic, RoughDielectric, RoughPlastic,
 };
 use haze_core::Rgb;
 
@@ -100,6 +100,17 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
                 }
             }
         }
+        "mask" => {
+            // Mitsuba 3: `opacity` (0.5; a float, spectrum or texture in [0, 1]) over one
+            // nested BSDF.
+            let opacity = textures::texture(p, "opacity", Rgb::splat(0.5), (0.0, 1.0))?;
+            let nested = match p.objects(&["bsdf"])[..] {
+                [o] => build(&p.nested(o.target)?)?,
+                [] => return Err(p.element().error("a mask needs one nested or referenced <bsdf>")),
+                [_, o, ..] => return Err(o.site.error("a mask takes one <bsdf>")),
+            };
+            Bsdf::Mask(Box::new(Mask { opacity, nested: Box::new(nested) }))
+        }
         "conductor" | "roughconductor" => {
             let (eta, k) = complex_ior(p)?;
             let specular_reflectance = textures::texture(p, "specular_reflectance", Rgb::ONE, (0.0, 1.0))?;
@@ -112,6 +123,7 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
         "diffuse" => &["reflectance"],
         "plastic" | "roughplastic" => &["diffuse_reflectance"],
         "conductor" | "roughconductor" => &["specular_reflectance"],
+        "mask" => &["opacity"],
         _ => &[],
     };
     textures::reject_other_textures(p, texture_params)?;

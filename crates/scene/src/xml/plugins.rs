@@ -79,6 +79,7 @@ const PLUGINS: &[PluginEntry] = &[
     ),
     ("bsdf", "twosided", &[]),
     ("bsdf", "conductor", &["material", "eta", "k", "specular_reflectance"]),
+    ("bsdf", "mask", &["opacity"]),
     (
         "bsdf",
         "roughconductor",
