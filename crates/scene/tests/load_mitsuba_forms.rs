@@ -370,3 +370,26 @@ fn masks_wrap_one_bsdf_with_an_opacity() {
         assert!(e.message.contains(want), "{xml}: {e}");
     }
 }
+
+#[test]
+fn pplastic_reads_mitsuba_parameters() {
+    let Ok(haze_scene::Bsdf::PPlastic(b)) = bsdf_of(
+        r#"<bsdf type="pplastic"><rgb name="diffuse_reflectance" value="0.05, 0.03, 0.1"/><float name="alpha" value="0.06"/></bsdf>"#,
+    ) else {
+        panic!("a pplastic")
+    };
+    assert_eq!((b.distr.alpha, b.distr.ty), (0.06, haze_scene::bsdf::MicrofacetType::Beckmann));
+    assert!((b.eta - 1.49 / 1.000277).abs() < 1e-6, "polypropylene in air");
+    let Ok(haze_scene::Bsdf::PPlastic(b)) =
+        bsdf_of(r#"<bsdf type="pplastic"><float name="eta" value="1.3"/></bsdf>"#)
+    else {
+        panic!("a pplastic")
+    };
+    assert_eq!(b.eta, 1.3);
+    let e = bsdf_of(
+        r#"<bsdf type="pplastic"><float name="eta" value="1.3"/><float name="int_ior" value="1.5"/></bsdf>"#,
+    )
+    .err()
+    .expect("an error");
+    assert!(e.message.contains("either 'eta' or 'int_ior'"), "{e}");
+}

@@ -1,6 +1,6 @@
 //! Surface scattering models: Mitsuba 3's BSDF plugins `null`, `diffuse`, `dielectric`,
 //! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic`, `twosided`, `conductor` and
-//! `roughconductor`, and `mask`, one file each,
+//! `roughconductor`, `mask` and `pplastic` (unpolarised), one file each,
 //! with the microfacet distributions they share in [`microfacet`].
 //!
 //! Local shading frame: `z` is the shading normal. `wi` points *away* from the surface towards
@@ -13,6 +13,7 @@ mod dielectric;
 mod mask;
 pub mod microfacet;
 mod plastic;
+mod pplastic;
 mod roughdielectric;
 mod roughplastic;
 mod thindielectric;
@@ -23,6 +24,7 @@ pub use dielectric::fresnel_dielectric;
 pub use mask::Mask;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
+pub use pplastic::PPlastic;
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::RoughPlastic;
 
@@ -54,6 +56,8 @@ pub enum Bsdf {
     Conductor(Box<Conductor>),
     /// The nested BSDF with probability `opacity`, else straight through (`mask`).
     Mask(Box<Mask>),
+    /// Mitsuba's `pplastic`, unpolarised: a specular lobe over a diffuse base, front side only.
+    PPlastic(Box<PPlastic>),
 }
 
 /// A sampled outgoing direction.
@@ -159,6 +163,7 @@ impl Bsdf {
             Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv, with_pdf),
             Bsdf::Conductor(c) => c.sample(wi, u2, uv),
             Bsdf::Mask(m) => m.sample(wi, u1, u2, uv, with_pdf),
+            Bsdf::PPlastic(b) => b.sample(wi, u1, u2, uv),
         }
     }
 
@@ -174,6 +179,7 @@ impl Bsdf {
             Bsdf::TwoSided(b) => twosided::eval(b, wi, wo, uv),
             Bsdf::Conductor(c) => c.eval(wi, wo, uv),
             Bsdf::Mask(m) => m.eval(wi, wo, uv),
+            Bsdf::PPlastic(b) => b.eval(wi, wo, uv),
             _ => Rgb::ZERO,
         }
     }
@@ -182,8 +188,14 @@ impl Bsdf {
     /// (`z > 0`): `diffuse`, `plastic`, `roughplastic` and the conductors (each checks exactly
     /// that first).
     pub fn front_only(&self) -> bool {
-        matches!(self, Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) | Bsdf::Conductor(_))
-            || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
+        matches!(
+            self,
+            Bsdf::Diffuse { .. }
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
+                | Bsdf::Conductor(_)
+                | Bsdf::PPlastic(_)
+        ) || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
     }
 
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
@@ -197,6 +209,7 @@ impl Bsdf {
             Bsdf::TwoSided(b) => twosided::pdf(b, wi, wo, uv),
             Bsdf::Conductor(c) => c.pdf(wi, wo),
             Bsdf::Mask(m) => m.pdf(wi, wo, uv),
+            Bsdf::PPlastic(b) => b.pdf(wi, wo),
             _ => 0.0,
         }
     }
@@ -210,6 +223,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval_pdf(b, wi, wo, uv),
             Bsdf::Mask(m) => m.eval_pdf(wi, wo, uv),
+            Bsdf::PPlastic(b) => b.eval_pdf(wi, wo, uv),
             _ => (self.eval(wi, wo, uv), self.pdf(wi, wo, uv)),
         }
     }

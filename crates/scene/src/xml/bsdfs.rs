@@ -1,11 +1,12 @@
 //! BSDF plugins `null`, `diffuse`, `dielectric`, `thindielectric`, `roughdielectric`,
-//! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor` and `mask`, and Mitsuba 3's table
+//! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor`, `mask` and `pplastic`, and Mitsuba 3's table
 //! of named indices of refraction.
 
 use super::params::Params;
 use super::{textures, LoadError};
 use crate::bsdf::{
-    conductor_ior, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, Plastic, RoughDielectric, RoughPlastic,
+    conductor_ior, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, PPlastic, Plastic, RoughDielectric,
+    RoughPlastic,
 };
 use haze_core::Rgb;
 
@@ -100,6 +101,24 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
                 }
             }
         }
+        "pplastic" => {
+            let diffuse = textures::texture(p, "diffuse_reflectance", Rgb::splat(0.5), (0.0, 1.0))?;
+            let specular = textures::texture(p, "specular_reflectance", Rgb::ONE, (0.0, 1.0))?;
+            let eta = match p.float_opt("eta")? {
+                Some(e) if p.raw("int_ior").is_some() || p.raw("ext_ior").is_some() => {
+                    let _ = e;
+                    return Err(p.error_at("eta", "give either 'eta' or 'int_ior'/'ext_ior', not both"));
+                }
+                Some(e) if !(MIN_IOR..=MAX_IOR).contains(&e) => {
+                    return Err(
+                        p.error_at("eta", format!("'eta' must lie in [{MIN_IOR}, {MAX_IOR}], got {e}"))
+                    )
+                }
+                Some(e) => e,
+                None => eta(p, "polypropylene")?,
+            };
+            Bsdf::PPlastic(Box::new(PPlastic::new(microfacet(p)?, eta, diffuse, specular)))
+        }
         "mask" => {
             // Mitsuba 3: `opacity` (0.5; a float, spectrum or texture in [0, 1]) over one
             // nested BSDF.
@@ -124,6 +143,7 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
         "plastic" | "roughplastic" => &["diffuse_reflectance"],
         "conductor" | "roughconductor" => &["specular_reflectance"],
         "mask" => &["opacity"],
+        "pplastic" => &["diffuse_reflectance", "specular_reflectance"],
         _ => &[],
     };
     textures::reject_other_textures(p, texture_params)?;
@@ -195,7 +215,7 @@ fn microfacet(p: &Params) -> Result<Microfacet, LoadError> {
         })?,
     };
     let anisotropic = match p.ty() {
-        "roughconductor" => (p.float_opt("alpha_u")?, p.float_opt("alpha_v")?),
+        "roughconductor" | "pplastic" => (p.float_opt("alpha_u")?, p.float_opt("alpha_v")?),
         _ => (None, None),
     };
     let alpha = match anisotropic {

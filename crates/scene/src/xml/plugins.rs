@@ -82,6 +82,22 @@ const PLUGINS: &[PluginEntry] = &[
     ("bsdf", "mask", &["opacity"]),
     (
         "bsdf",
+        "pplastic",
+        &[
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "int_ior",
+            "ext_ior",
+            "eta",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+            "sample_visible",
+        ],
+    ),
+    (
+        "bsdf",
         "roughconductor",
         &[
             "distribution",
