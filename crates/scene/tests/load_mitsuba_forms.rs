@@ -389,7 +389,6 @@ fn pplastic_reads_mitsuba_parameters() {
     let e = bsdf_of(
         r#"<bsdf type="pplastic"><float name="eta" value="1.3"/><float name="int_ior" value="1.5"/></bsdf>"#,
     )
-    .err()
-    .expect("an error");
+    .expect_err("an error");
     assert!(e.message.contains("either 'eta' or 'int_ior'"), "{e}");
 }

@@ -81,7 +81,7 @@ impl Conductor {
             return None;
         }
         let pdf = distr.pdf(wi, m) / (4.0 * wo.dot(m));
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if pdf.is_nan() || pdf <= 0.0 || !pdf.is_finite() {
             return None;
         }
         // eval / pdf: F D G / (4 cos_i) over D pdf_m / (4 wo.m).

@@ -202,10 +202,12 @@ pub(crate) mod tests {
             file.extend_from_slice(&MAGIC.to_le_bytes());
             file.extend_from_slice(&version.to_le_bytes());
             let mut body = Vec::new();
-            let flags = u32::from(m.normals.is_some()) * HAS_NORMALS
-                | u32::from(m.uvs.is_some()) * HAS_TEXCOORDS
-                | u32::from(m.colors) * HAS_COLORS
-                | if m.double { DOUBLE_PRECISION } else { 0x1000 };
+            let flag = |on: bool, bit: u32| if on { bit } else { 0 };
+            let flags = flag(m.normals.is_some(), HAS_NORMALS)
+                | flag(m.uvs.is_some(), HAS_TEXCOORDS)
+                | flag(m.colors, HAS_COLORS)
+                | flag(m.double, DOUBLE_PRECISION)
+                | flag(!m.double, 0x1000);
             body.extend_from_slice(&flags.to_le_bytes());
             if version == 4 {
                 body.extend_from_slice(b"mesh name\0");

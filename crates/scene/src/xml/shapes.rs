@@ -202,7 +202,7 @@ fn cylinder(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry,
     }
     let axis = p1 - p0;
     let length = axis.length();
-    if !(length > 0.0) {
+    if length.is_nan() || length <= 0.0 {
         return Err(p.error_at("p1", "'p0' and 'p1' must differ"));
     }
     let d = axis / length;
