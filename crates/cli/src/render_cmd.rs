@@ -3,7 +3,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Arg, ArgAction, ArgMatches, Args, FromArgMatches};
 use haze_engine::options::{not_applicable, Kind, OPTIONS};
-use haze_engine::{method_names, prepare, Method, MethodKind, Options, Spelling};
+use haze_engine::{method_names, prepare, replacement_note, Method, MethodKind, Options, Spelling};
 use haze_render::image_io::RgbImage;
 use haze_render::progressive::{PassReport, RenderOutput, RenderSettings};
 use haze_render::Component;
@@ -148,6 +148,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
     let (kind, options) = prepare(&scene, args.integrator.as_deref(), &args.options.pairs(), Spelling::Flag)
         .with_context(|| format!("{}", args.scene.display()))?;
+    if let Some(note) = replacement_note(&scene, args.integrator.as_deref()) {
+        eprintln!("{note}");
+    }
     if args.cut_image.is_some() && !kind.is_lightcuts() {
         return Err(not_applicable("--cut-image", kind, MethodKind::LIGHTCUTS));
     }

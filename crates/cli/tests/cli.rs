@@ -196,3 +196,56 @@ fn cut_image_is_a_heat_map_of_the_image_size() {
         ["render", s(&scene), "-o", s(&out), "-D", "res=8", "--integrator", "vrl", "--cut-image", s(&map)];
     assert_fails_with(&haze(&args), "--cut-image does not apply to vrl");
 }
+
+/// `--integrator` replaces a scene integrator haze does not have (Mitsuba's `direct` here),
+/// with one note on stderr naming it; without `--integrator` the scene is an error naming the
+/// file and line of its `<integrator>`.
+#[test]
+fn integrator_flag_replaces_an_unsupported_scene_integrator() {
+    let dir = common::tmp_dir("replaced-integrator");
+    let scene = dir.join("direct.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+  <integrator type="direct"><integer name="emitter_samples" value="2"/></integrator>
+  <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+  <shape type="sphere"><emitter type="area"/></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let out = dir.join("out.exr");
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "render".to_string(),
+            s(&scene).to_string(),
+            "-o".into(),
+            s(&out).to_string(),
+            "-q".into(),
+            "--spp".into(),
+            "1".into(),
+        ];
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    let run = |extra: &[&'static str]| Command::new(HAZE).args(args(extra)).output().unwrap();
+    let o = run(&[]);
+    assert_fails_with(
+        &o,
+        &format!(
+            "{}:2:3: <integrator type=\"direct\">: unsupported integrator type 'direct'",
+            scene.display()
+        ),
+    );
+    assert!(!out.exists());
+    let o = run(&["--integrator", "volpath"]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let notes: Vec<&str> = err.lines().filter(|l| l.starts_with("note: ")).collect();
+    assert_eq!(notes.len(), 1, "{err}");
+    assert!(
+        notes[0].contains("'volpath' replaces the scene's <integrator type=\"direct\">")
+            && notes[0].contains(":2)"),
+        "{err}"
+    );
+    assert!(out.exists());
+}

@@ -22,5 +22,5 @@ pub use haze_core as core;
 pub use haze_manylight as manylight;
 pub use haze_render as render;
 pub use haze_scene as scene;
-pub use methods::{method_kind, prepare, Method};
+pub use methods::{method_kind, prepare, replacement_note, Method};
 pub use options::{method_names, MethodKind, MethodOptions, Options, Spelling, OPTIONS};

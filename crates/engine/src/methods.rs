@@ -16,7 +16,15 @@ use std::sync::atomic::AtomicBool;
 
 /// The method `name` names for `scene` (`None`: the scene's own `<integrator>`). `path` is
 /// volpath for scenes without media (Mitsuba 3's `path` ignores media).
+///
+/// This is the one place a render's integrator is chosen: a given `name` replaces the scene's
+/// `<integrator>`, whatever its type (haze loads scenes whose integrator it does not have,
+/// `IntegratorSpec::unsupported`); without one, such a scene is an error naming the file and
+/// line of its `<integrator>`. [`replacement_note`] says what a given name replaced.
 pub fn method_kind(scene: &Scene, name: Option<&str>) -> Result<MethodKind> {
+    if let (None, Some(e)) = (name, &scene.integrator.unsupported) {
+        bail!("{e}");
+    }
     let name = name.unwrap_or(&scene.integrator.name);
     if name == "path" {
         if !scene.media.is_empty() {
@@ -26,6 +34,33 @@ pub fn method_kind(scene: &Scene, name: Option<&str>) -> Result<MethodKind> {
     }
     MethodKind::from_name(name)
         .ok_or_else(|| anyhow!("unknown integrator '{name}' (available: {})", method_names()))
+}
+
+/// The one-line note a front end prints when the method `name` it was given replaces the
+/// `<integrator>` the scene declares (of another type): which one, where, and the settings
+/// kept from it (`max_depth`, `rr_depth`, `hide_emitters` apply to every method). `None` when
+/// nothing was replaced.
+pub fn replacement_note(scene: &Scene, name: Option<&str>) -> Option<String> {
+    let spec = &scene.integrator;
+    let (name, at) = (name?, spec.declared_at.as_ref()?);
+    if name == spec.name {
+        return None;
+    }
+    let mut kept = Vec::new();
+    if spec.max_depth != -1 {
+        kept.push(format!("max_depth {}", spec.max_depth));
+    }
+    if spec.rr_depth != 5 {
+        kept.push(format!("rr_depth {}", spec.rr_depth));
+    }
+    if spec.hide_emitters {
+        kept.push("hide_emitters".to_string());
+    }
+    let kept = if kept.is_empty() { String::new() } else { format!(", keeping its {}", kept.join(", ")) };
+    Some(format!(
+        "note: integrator '{name}' replaces the scene's <integrator type=\"{}\"> ({at}){kept}",
+        spec.name
+    ))
 }
 
 /// What every front end does first: the method (`integrator`, default the scene's) and its
@@ -151,5 +186,42 @@ impl Method {
             Method::VplLightcuts(i) => Some(i.cut_statistics().0),
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(integrator: &str) -> Scene {
+        let xml = format!(r#"<scene version="3.0.0"><sensor type="perspective"/>{integrator}</scene>"#);
+        let p = std::path::Path::new("t.xml");
+        haze_scene::load_str(&xml, p, std::path::Path::new("."), &haze_scene::LoadOptions::default()).unwrap()
+    }
+
+    /// A given method replaces any scene integrator, one haze does not have included, with one
+    /// note; without one, an unsupported scene integrator is the loader's located error.
+    #[test]
+    fn a_given_method_replaces_the_scene_integrator() {
+        let direct = scene(r#"<integrator type="direct"/>"#);
+        let e = method_kind(&direct, None).unwrap_err().to_string();
+        assert!(e.starts_with("t.xml:1:") && e.contains("unsupported integrator type 'direct'"), "{e}");
+        assert_eq!(method_kind(&direct, Some("vrl")).unwrap(), MethodKind::Vrl);
+        assert_eq!(
+            replacement_note(&direct, Some("volpath")).as_deref(),
+            Some("note: integrator 'volpath' replaces the scene's <integrator type=\"direct\"> (t.xml:1), keeping its max_depth 2")
+        );
+        assert_eq!(replacement_note(&direct, None), None, "nothing replaced");
+
+        let volpath = scene(r#"<integrator type="volpath"/>"#);
+        assert_eq!(replacement_note(&volpath, Some("volpath")), None, "the same type is no replacement");
+        assert!(replacement_note(&volpath, Some("vpl")).is_some_and(|n| !n.contains("keeping")));
+        assert_eq!(replacement_note(&scene(""), Some("vpl")), None, "no <integrator> to replace");
+        assert_eq!(method_kind(&volpath, None).unwrap(), MethodKind::VolPath);
+        // An unknown method name stays an error.
+        assert!(method_kind(&direct, Some("bdpt"))
+            .unwrap_err()
+            .to_string()
+            .contains("unknown integrator 'bdpt'"));
     }
 }

@@ -123,6 +123,10 @@ impl Scene {
     ) -> PyResult<Film> {
         let given = given(options)?;
         let scene = self.inner.clone();
+        // As `haze render`: one line on stderr when `integrator` replaces the scene's own.
+        if let Some(note) = haze_engine::replacement_note(&scene, integrator.as_deref()) {
+            eprintln!("{note}");
+        }
         let out = interrupt::run(py, move |cancel| -> anyhow::Result<_> {
             let (kind, m, options) = method(&scene, integrator.as_deref(), &given)?;
             Ok(m.render(&scene, &options.render_settings(kind, &scene), cancel, |_| {}))

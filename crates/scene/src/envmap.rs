@@ -394,7 +394,7 @@ impl EnvMap {
     }
 }
 
-fn read_exr(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
+pub(crate) fn read_exr(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
     use exr::prelude::*;
     type Pixels = (usize, usize, Vec<f32>);
     let image = read_first_rgba_layer_from_file(
@@ -409,7 +409,7 @@ fn read_exr(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
     Ok(image.layer_data.channel_data.pixels)
 }
 
-fn read_hdr(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
+pub(crate) fn read_hdr(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
     let img = image::open(path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
     let rgb = img.into_rgb32f();
     Ok((rgb.width() as usize, rgb.height() as usize, rgb.into_raw()))

@@ -5,6 +5,7 @@
 //! `to_world`, ...), so a reader who knows a scene file finds the code that handles it.
 
 pub mod accel;
+pub mod bitmap;
 pub mod boundary;
 pub mod bsdf;
 pub mod camera;

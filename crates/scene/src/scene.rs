@@ -26,6 +26,12 @@ pub struct IntegratorSpec {
     pub rr_depth: u32,
     /// Do not show emitters seen directly by the camera.
     pub hide_emitters: bool,
+    /// Where the scene declares its `<integrator>` (`file:line`); `None` when it has none.
+    pub declared_at: Option<String>,
+    /// Set when haze has no integrator of the scene's type (`direct`, `ptracer`, `aov`, ...):
+    /// the error, naming file and line, that rendering the scene with its own integrator gives.
+    /// A render that names its integrator (`--integrator`) replaces it and never reads this.
+    pub unsupported: Option<String>,
 }
 
 /// Hard cap on the scattering events of one path, whatever `max_depth` says. With
@@ -58,7 +64,14 @@ impl IntegratorSpec {
 
 impl Default for IntegratorSpec {
     fn default() -> Self {
-        IntegratorSpec { name: "volpath".into(), max_depth: -1, rr_depth: 5, hide_emitters: false }
+        IntegratorSpec {
+            name: "volpath".into(),
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            declared_at: None,
+            unsupported: None,
+        }
     }
 }
 

@@ -1,11 +1,13 @@
-//! Reflectance textures (Mitsuba 3 plugins: a constant spectrum, `checkerboard`).
+//! Reflectance textures (Mitsuba 3 plugins: a constant spectrum, `checkerboard`, `bitmap`).
 //!
 //! A texture maps the surface parameterisation `uv` of a hit to an RGB value. Only the
 //! reflectance-like parameters of the BSDFs take one (`diffuse.reflectance`,
 //! `plastic.diffuse_reflectance`, ...).
 
+use crate::bitmap::Bitmap;
 use glam::{Affine2, Mat2, Vec2};
 use haze_core::Rgb;
+use std::sync::Arc;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Texture {
@@ -15,6 +17,8 @@ pub enum Texture {
     /// parts of `s` and `t` are both above 1/2 or both at most 1/2, else `color1`. The squares
     /// have side 1/2 in the transformed coordinates.
     Checkerboard { color0: Rgb, color1: Rgb, to_uv: Affine2 },
+    /// Mitsuba 3's `bitmap`: an image (shared by every BSDF that refers to it).
+    Bitmap(Arc<Bitmap>),
 }
 
 impl From<Rgb> for Texture {
@@ -37,6 +41,7 @@ impl Texture {
                     *color1
                 }
             }
+            Texture::Bitmap(b) => b.eval(uv),
         }
     }
 
@@ -46,6 +51,7 @@ impl Texture {
         match self {
             Texture::Constant(c) => *c,
             Texture::Checkerboard { color0, color1, .. } => (*color0 + *color1) * 0.5,
+            Texture::Bitmap(b) => b.mean(),
         }
     }
 
@@ -54,6 +60,7 @@ impl Texture {
         match self {
             Texture::Constant(c) => c.is_black(),
             Texture::Checkerboard { color0, color1, .. } => color0.is_black() && color1.is_black(),
+            Texture::Bitmap(b) => b.range() == (0.0, 0.0),
         }
     }
 
@@ -65,6 +72,7 @@ impl Texture {
                 color0.min_component().min(color1.min_component()),
                 color0.max_component().max(color1.max_component()),
             ),
+            Texture::Bitmap(b) => b.range(),
         }
     }
 }

@@ -119,8 +119,8 @@ fn bad_bsdf_and_texture_parameters() {
     assert!(e.contains("needs one nested or referenced <bsdf>"), "{e}");
     let e = err(r#"<bsdf type="twosided"><bsdf type="diffuse"/><bsdf type="null"/></bsdf>"#);
     assert!(e.contains("different BSDF on each side"), "{e}");
-    let e = err(r#"<bsdf type="diffuse"><texture type="bitmap" name="reflectance"/></bsdf>"#);
-    assert!(e.contains("unsupported texture type 'bitmap' (supported: checkerboard)"), "{e}");
+    let e = err(r#"<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf>"#);
+    assert!(e.contains("unsupported texture type 'mesh_attribute' (supported: checkerboard, bitmap)"), "{e}");
     let e = err(
         r#"<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"><rgb name="color0" value="2"/></texture></bsdf>"#,
     );

@@ -1,5 +1,6 @@
 //! Surface scattering models: Mitsuba 3's BSDF plugins `null`, `diffuse`, `dielectric`,
-//! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic` and `twosided`, one file each,
+//! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic`, `twosided`, `conductor` and
+//! `roughconductor`, `mask` and `pplastic` (unpolarised), one file each,
 //! with the microfacet distributions they share in [`microfacet`].
 //!
 //! Local shading frame: `z` is the shading normal. `wi` points *away* from the surface towards
@@ -7,17 +8,23 @@
 //! Mitsuba and pbrt. `uv` is the surface parameterisation of the hit, for textured parameters.
 //! Values include the cosine factor only where said.
 
+mod conductor;
 mod dielectric;
+mod mask;
 pub mod microfacet;
 mod plastic;
+mod pplastic;
 mod roughdielectric;
 mod roughplastic;
 mod thindielectric;
 mod twosided;
 
+pub use conductor::{conductor_ior, fresnel_conductor, Conductor, CONDUCTOR_IORS};
 pub use dielectric::fresnel_dielectric;
+pub use mask::Mask;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
+pub use pplastic::PPlastic;
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::RoughPlastic;
 
@@ -45,6 +52,12 @@ pub enum Bsdf {
     RoughPlastic(Box<RoughPlastic>),
     /// The nested BSDF on both sides: back-facing `wi` see it mirrored through the surface.
     TwoSided(Box<Bsdf>),
+    /// A smooth (`conductor`) or rough (`roughconductor`) metal, front side only.
+    Conductor(Box<Conductor>),
+    /// The nested BSDF with probability `opacity`, else straight through (`mask`).
+    Mask(Box<Mask>),
+    /// Mitsuba's `pplastic`, unpolarised: a specular lobe over a diffuse base, front side only.
+    PPlastic(Box<PPlastic>),
 }
 
 /// A sampled outgoing direction.
@@ -91,7 +104,7 @@ impl Bsdf {
     /// depth): `null` and `thindielectric`'s transmission.
     pub fn may_pass_through(&self) -> bool {
         match self {
-            Bsdf::Null | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Null | Bsdf::ThinDielectric { .. } | Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.may_pass_through(),
             _ => false,
         }
@@ -111,6 +124,8 @@ impl Bsdf {
     pub fn is_specular(&self) -> bool {
         match self {
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Conductor(c) => c.distr.is_none(),
+            Bsdf::Mask(m) => m.nested.is_specular(),
             Bsdf::TwoSided(b) => b.is_specular(),
             _ => false,
         }
@@ -146,6 +161,9 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::RoughPlastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv, with_pdf),
+            Bsdf::Conductor(c) => c.sample(wi, u2, uv),
+            Bsdf::Mask(m) => m.sample(wi, u1, u2, uv, with_pdf),
+            Bsdf::PPlastic(b) => b.sample(wi, u1, u2, uv),
         }
     }
 
@@ -159,26 +177,44 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.eval(wi, wo, uv),
             Bsdf::RoughPlastic(b) => b.eval(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval(b, wi, wo, uv),
+            Bsdf::Conductor(c) => c.eval(wi, wo, uv),
+            Bsdf::Mask(m) => m.eval(wi, wo, uv),
+            Bsdf::PPlastic(b) => b.eval(wi, wo, uv),
             _ => Rgb::ZERO,
         }
     }
 
     /// True if a sampled direction may leave on the other side of the surface than the one
-    /// the path arrived from (a refraction or a straight pass): `null` and the dielectrics.
+    /// the path arrived from (a refraction or a straight pass): `null`, the dielectrics and
+    /// `mask`.
     pub fn transmits(&self) -> bool {
         match self {
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } | Bsdf::RoughDielectric(_) => {
                 true
             }
-            Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) => false,
+            Bsdf::Diffuse { .. }
+            | Bsdf::Plastic(_)
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::Conductor(_)
+            | Bsdf::PPlastic(_) => false,
+            // A mask passes light straight through with probability `1 - opacity`.
+            Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.transmits(),
         }
     }
 
     /// True if [`Self::eval`] is zero unless `wi` and `wo` both lie on the front side
-    /// (`z > 0`): `diffuse`, `plastic` and `roughplastic` (each checks exactly that first).
+    /// (`z > 0`): `diffuse`, `plastic`, `roughplastic` and the conductors (each checks exactly
+    /// that first).
     pub fn front_only(&self) -> bool {
-        matches!(self, Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_))
+        matches!(
+            self,
+            Bsdf::Diffuse { .. }
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
+                | Bsdf::Conductor(_)
+                | Bsdf::PPlastic(_)
+        ) || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
     }
 
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
@@ -190,6 +226,9 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.pdf(wi, wo),
             Bsdf::RoughPlastic(b) => b.pdf(wi, wo),
             Bsdf::TwoSided(b) => twosided::pdf(b, wi, wo, uv),
+            Bsdf::Conductor(c) => c.pdf(wi, wo),
+            Bsdf::Mask(m) => m.pdf(wi, wo, uv),
+            Bsdf::PPlastic(b) => b.pdf(wi, wo),
             _ => 0.0,
         }
     }
@@ -202,6 +241,8 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::RoughPlastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval_pdf(b, wi, wo, uv),
+            Bsdf::Mask(m) => m.eval_pdf(wi, wo, uv),
+            Bsdf::PPlastic(b) => b.eval_pdf(wi, wo, uv),
             _ => (self.eval(wi, wo, uv), self.pdf(wi, wo, uv)),
         }
     }
@@ -212,20 +253,18 @@ impl Bsdf {
     /// True if [`Self::null_transmission`] can be non-zero (shadow rays cross the surface).
     pub fn transmits_null(&self) -> bool {
         match self {
-            Bsdf::Null | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Null | Bsdf::ThinDielectric { .. } | Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.transmits_null(),
             _ => false,
         }
     }
 
-    // `uv` belongs to the interface (a textured thin sheet would use it); today only `twosided`
-    // passes it on.
-    #[allow(clippy::only_used_in_recursion)]
     pub fn null_transmission(&self, wi: Vec3, uv: Vec2) -> Rgb {
         match self {
             Bsdf::Null => Rgb::ONE,
             Bsdf::ThinDielectric { eta } => Rgb::splat(1.0 - thindielectric::reflectance(*eta, wi.z)),
             Bsdf::TwoSided(b) => b.null_transmission(twosided::front(wi), uv),
+            Bsdf::Mask(m) => Rgb::splat(1.0 - m.alpha(uv)),
             _ => Rgb::ZERO,
         }
     }

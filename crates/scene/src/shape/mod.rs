@@ -10,7 +10,7 @@ mod primitives;
 mod sample;
 
 pub use mesh::TriangleMesh;
-pub use primitives::{cube_mesh, rectangle_mesh};
+pub use primitives::{cube_mesh, cylinder_mesh, rectangle_mesh, CYLINDER_SEGMENTS};
 pub use sample::{AreaSampler, SurfaceSample};
 
 use crate::bsdf::Bsdf;

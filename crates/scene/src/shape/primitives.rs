@@ -4,6 +4,36 @@ use super::TriangleMesh;
 use glam::{Mat4, Vec2, Vec3};
 
 /// `rectangle`: the square `[-1, 1]^2` in the local `z = 0` plane, normal `+z`.
+/// Segments around a tessellated `cylinder`: the polygon's largest distance from the true
+/// surface is `1 - cos(pi / 512) = 1.9e-5` radii, and vertex normals are the exact radial ones.
+pub const CYLINDER_SEGMENTS: usize = 512;
+
+/// `cylinder`: the open tube `x^2 + y^2 = 1, 0 <= z <= 1` (no caps, Mitsuba 3's), placed by
+/// `to_world`, as a triangle mesh of [`CYLINDER_SEGMENTS`] quads with outward radial vertex
+/// normals and `uv = (phi / 2 pi, z)`. `to_world` must be invertible.
+pub fn cylinder_mesh(to_world: &Mat4, flip_normals: bool) -> TriangleMesh {
+    let n = CYLINDER_SEGMENTS;
+    let normal_matrix = glam::Mat3::from_mat4(*to_world).inverse().transpose();
+    let (mut positions, mut normals, mut uvs) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..=n {
+        let phi = std::f32::consts::TAU * i as f32 / n as f32;
+        let (s, c) = if i == n { (0.0, 1.0) } else { phi.sin_cos() };
+        for z in [0.0, 1.0] {
+            positions.push(to_world.transform_point3(Vec3::new(c, s, z)));
+            normals.push((normal_matrix * Vec3::new(c, s, 0.0)).normalize_or_zero());
+            uvs.push(Vec2::new(i as f32 / n as f32, z));
+        }
+    }
+    // Vertex 2i is (phi_i, z = 0), 2i + 1 is (phi_i, z = 1); counter-clockwise seen from outside.
+    let mut indices = Vec::with_capacity(2 * n);
+    for i in 0..n as u32 {
+        let (b0, t0, b1, t1) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        indices.push([b0, b1, t1]);
+        indices.push([b0, t1, t0]);
+    }
+    TriangleMesh::new(positions, Some(normals), Some(uvs), indices, flip_normals)
+}
+
 pub fn rectangle_mesh(to_world: &Mat4, flip_normals: bool) -> TriangleMesh {
     let p = [
         Vec3::new(-1.0, -1.0, 0.0),

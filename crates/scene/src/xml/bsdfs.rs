@@ -1,9 +1,13 @@
 //! BSDF plugins `null`, `diffuse`, `dielectric`, `thindielectric`, `roughdielectric`,
-//! `plastic`, `roughplastic` and `twosided`, and Mitsuba 3's table of named indices of refraction.
+//! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor`, `mask` and `pplastic`, and Mitsuba 3's table
+//! of named indices of refraction.
 
 use super::params::Params;
 use super::{textures, LoadError};
-use crate::bsdf::{Bsdf, Microfacet, MicrofacetType, Plastic, RoughDielectric, RoughPlastic};
+use crate::bsdf::{
+    conductor_ior, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, PPlastic, Plastic, RoughDielectric,
+    RoughPlastic,
+};
 use haze_core::Rgb;
 
 /// Mitsuba 3's named indices of refraction (`int_ior="water"`), at 589 nm, as listed in its
@@ -97,11 +101,49 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
                 }
             }
         }
+        "pplastic" => {
+            let diffuse = textures::texture(p, "diffuse_reflectance", Rgb::splat(0.5), (0.0, 1.0))?;
+            let specular = textures::texture(p, "specular_reflectance", Rgb::ONE, (0.0, 1.0))?;
+            let eta = match p.float_opt("eta")? {
+                Some(e) if p.raw("int_ior").is_some() || p.raw("ext_ior").is_some() => {
+                    let _ = e;
+                    return Err(p.error_at("eta", "give either 'eta' or 'int_ior'/'ext_ior', not both"));
+                }
+                Some(e) if !(MIN_IOR..=MAX_IOR).contains(&e) => {
+                    return Err(
+                        p.error_at("eta", format!("'eta' must lie in [{MIN_IOR}, {MAX_IOR}], got {e}"))
+                    )
+                }
+                Some(e) => e,
+                None => eta(p, "polypropylene")?,
+            };
+            Bsdf::PPlastic(Box::new(PPlastic::new(microfacet(p)?, eta, diffuse, specular)))
+        }
+        "mask" => {
+            // Mitsuba 3: `opacity` (0.5; a float, spectrum or texture in [0, 1]) over one
+            // nested BSDF.
+            let opacity = textures::texture(p, "opacity", Rgb::splat(0.5), (0.0, 1.0))?;
+            let nested = match p.objects(&["bsdf"])[..] {
+                [o] => build(&p.nested(o.target)?)?,
+                [] => return Err(p.element().error("a mask needs one nested or referenced <bsdf>")),
+                [_, o, ..] => return Err(o.site.error("a mask takes one <bsdf>")),
+            };
+            Bsdf::Mask(Box::new(Mask { opacity, nested: Box::new(nested) }))
+        }
+        "conductor" | "roughconductor" => {
+            let (eta, k) = complex_ior(p)?;
+            let specular_reflectance = textures::texture(p, "specular_reflectance", Rgb::ONE, (0.0, 1.0))?;
+            let distr = if p.ty() == "roughconductor" { Some(microfacet(p)?) } else { None };
+            Bsdf::Conductor(Box::new(Conductor { eta, k, specular_reflectance, distr }))
+        }
         _ => Bsdf::Null,
     };
     let texture_params: &[&str] = match p.ty() {
         "diffuse" => &["reflectance"],
         "plastic" | "roughplastic" => &["diffuse_reflectance"],
+        "conductor" | "roughconductor" => &["specular_reflectance"],
+        "mask" => &["opacity"],
+        "pplastic" => &["diffuse_reflectance", "specular_reflectance"],
         _ => &[],
     };
     textures::reject_other_textures(p, texture_params)?;
@@ -131,7 +173,37 @@ fn unit_scale_factors(p: &Params, names: &[&str]) -> Result<(), LoadError> {
     Ok(())
 }
 
+/// A conductor's complex index of refraction `(eta, k)`, as Mitsuba 3 reads it: `eta` and `k`
+/// (defaults 0 and 1: a perfect mirror) when `eta` is given or `material` is `none` (its
+/// default), else the named `material`'s (`Au`, `Cu`, ...; [`crate::bsdf::CONDUCTOR_IORS`]).
+fn complex_ior(p: &Params) -> Result<(Rgb, Rgb), LoadError> {
+    let material = p.string_opt("material")?;
+    let eta = p.spectrum_opt("eta")?;
+    let (eta, k) = match (material, eta) {
+        (Some(m), Some(_)) if m != "none" => {
+            return Err(p.error_at("eta", "give either 'eta' and 'k' or 'material', not both"))
+        }
+        (None | Some("none"), eta) | (_, eta @ Some(_)) => {
+            (eta.unwrap_or(Rgb::ZERO), p.spectrum("k", Rgb::ONE)?)
+        }
+        (Some(m), None) => conductor_ior(m).ok_or_else(|| {
+            p.error_at(
+                "material",
+                format!("unknown conductor '{m}' (Mitsuba 3's names, case-sensitive: Au, Ag, Al, Cu, Cr, ...; or none)"),
+            )
+        })?,
+    };
+    for (name, v) in [("eta", eta), ("k", k)] {
+        if v.min_component() < 0.0 || v.max_component() > MAX_IOR {
+            return Err(p.error_at(name, format!("'{name}' must lie in [0, {MAX_IOR}] in every channel")));
+        }
+    }
+    Ok((eta, k))
+}
+
 /// `distribution` (`beckmann` default, `ggx`), `alpha` (0.1, > 0) and `sample_visible` (true).
+/// For the conductors also `alpha_u` and `alpha_v` (both or neither, instead of `alpha`), which
+/// must be equal: haze's microfacet distributions are isotropic.
 fn microfacet(p: &Params) -> Result<Microfacet, LoadError> {
     let ty = match p.string_opt("distribution")? {
         None => MicrofacetType::Beckmann,
@@ -142,7 +214,27 @@ fn microfacet(p: &Params) -> Result<Microfacet, LoadError> {
             )
         })?,
     };
-    let alpha = p.float("alpha", 0.1)?;
+    let anisotropic = match p.ty() {
+        "roughconductor" | "pplastic" => (p.float_opt("alpha_u")?, p.float_opt("alpha_v")?),
+        _ => (None, None),
+    };
+    let alpha = match anisotropic {
+        (None, None) => p.float("alpha", 0.1)?,
+        (Some(u), Some(v)) => {
+            if p.float_opt("alpha")?.is_some() {
+                return Err(p.error_at("alpha", "give either 'alpha' or 'alpha_u' and 'alpha_v', not both"));
+            }
+            if u != v {
+                return Err(p.error_at(
+                    "alpha_v",
+                    format!("unsupported: anisotropic roughness (alpha_u {u} != alpha_v {v}); haze's microfacets are isotropic"),
+                ));
+            }
+            u
+        }
+        (Some(_), None) => return Err(p.error_at("alpha_u", "'alpha_u' needs 'alpha_v' too")),
+        (None, Some(_)) => return Err(p.error_at("alpha_v", "'alpha_v' needs 'alpha_u' too")),
+    };
     if alpha.is_nan() || alpha <= 0.0 {
         return Err(p.error_at("alpha", format!("'alpha' must be > 0, got {alpha}")));
     }

@@ -35,7 +35,7 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
                         first.line
                     )));
                 }
-                integrator = Some((integrator::build(&b.params(el)?)?, el));
+                integrator = Some((integrator::build(&b, el)?, el));
             }
             "shape" => shapes::build(&mut b, el)?,
             "medium" => {
@@ -44,7 +44,16 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             "emitter" => {
                 let p = b.params(el)?;
                 if p.ty() == "area" {
-                    return Err(el.error("an area emitter must be nested inside the <shape> that emits"));
+                    // Mitsuba 3 lets shapes refer to an area emitter declared at the top level
+                    // with an id (`<ref id=".."/>` in the shape); each referring shape emits.
+                    if el.attr("id").is_none() {
+                        return Err(el.error(
+                            "an area emitter must be nested inside the <shape> that emits \
+                             (or declared with an id and referenced from it)",
+                        ));
+                    }
+                    emitters::area_radiance(&p)?;
+                    continue;
                 }
                 let emitter = emitters::build(&p, b.doc)?;
                 b.emitters.push(emitter);
@@ -63,9 +72,12 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             "volume" => {
                 media::volume(&b.params(el)?, "volume", (0.0, f32::INFINITY), b.doc)?;
             }
+            // Declared at the top level to be referenced (Mitsuba 3 allows it): checked where
+            // they are used.
+            "film" | "sampler" | "rfilter" if el.attr("id").is_some() => {}
             "film" | "sampler" | "rfilter" => {
                 return Err(el.error(format!(
-                    "<{}> must be nested inside {}",
+                    "<{}> must be nested inside {} (or declared with an id and referenced)",
                     el.tag,
                     if el.tag == "rfilter" { "<film>" } else { "<sensor>" }
                 )))

@@ -35,7 +35,7 @@ impl<'a> Builder<'a> {
     }
 
     pub fn params(&self, el: &'a Element) -> Result<Params<'a>, LoadError> {
-        Params::new(el, self.ids)
+        Params::new(el, self.ids, self.doc)
     }
 
     /// The medium defined by `el`, built on first use.

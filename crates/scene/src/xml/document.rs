@@ -31,6 +31,9 @@ pub(super) struct Document {
     /// Every file read or resolved so far besides the main file (includes, then meshes and
     /// images as the builder resolves them), for shipping a scene to other machines.
     pub files: RefCell<Vec<PathBuf>>,
+    /// Bitmap textures already loaded, by element: a texture referenced from several places
+    /// is read once and shared.
+    pub bitmaps: RefCell<HashMap<usize, std::sync::Arc<crate::bitmap::Bitmap>>>,
 }
 
 impl Document {
@@ -141,7 +144,12 @@ pub(super) fn parse(
     }
     check_version(&scene)?;
     ctx.fill(&lines, root, &source, true, 1, &mut scene)?;
-    Ok(Document { root: scene, search_dirs: ctx.search_dirs, files: RefCell::new(ctx.files) })
+    Ok(Document {
+        root: scene,
+        search_dirs: ctx.search_dirs,
+        files: RefCell::new(ctx.files),
+        bitmaps: RefCell::default(),
+    })
 }
 
 /// Mitsuba 3 reads files of format versions 2.x and 3.x (older ones it upgrades, which we do

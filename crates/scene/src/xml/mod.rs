@@ -27,6 +27,7 @@ mod params;
 mod plugins;
 mod ply;
 mod sensor;
+mod serialized;
 mod shapes;
 mod textures;
 mod transform;

@@ -7,7 +7,7 @@
 //! unreferenced properties. Values are checked where they are read, and errors point at the
 //! parameter's element.
 
-use super::document::Element;
+use super::document::{Document, Element};
 use super::plugins;
 use super::transform;
 use super::values::{parse_float, tokens, vector3};
@@ -52,6 +52,7 @@ pub(super) struct Params<'a> {
     ty: &'a str,
     allowed: &'static [&'static str],
     ids: &'a Ids<'a>,
+    doc: &'a Document,
     props: Vec<Prop<'a>>,
     objects: Vec<Object<'a>>,
 }
@@ -60,14 +61,14 @@ impl<'a> Params<'a> {
     /// Collects the parameters of plugin element `el`; its tag is the plugin kind. Fails for
     /// unsupported types, unknown tags, malformed parameter elements, duplicate parameters and
     /// dangling references.
-    pub fn new(el: &'a Element, ids: &'a Ids<'a>) -> Result<Self, LoadError> {
+    pub fn new(el: &'a Element, ids: &'a Ids<'a>, doc: &'a Document) -> Result<Self, LoadError> {
         let kind = el.tag.as_str();
         el.check_attrs(&["type", "id", "name"])?;
         let ty = el.required_attr("type")?;
         let allowed = plugins::parameters(kind, ty).ok_or_else(|| {
             el.error(format!("unsupported {kind} type '{ty}' (supported: {})", plugins::types_of(kind)))
         })?;
-        let mut params = Params { el, ty, allowed, ids, props: Vec::new(), objects: Vec::new() };
+        let mut params = Params { el, ty, allowed, ids, doc, props: Vec::new(), objects: Vec::new() };
         for child in &el.children {
             params.add_child(child)?;
         }
@@ -119,7 +120,12 @@ impl<'a> Params<'a> {
 
     /// Parameters of a nested object or referenced definition `el`.
     pub fn nested(&self, el: &'a Element) -> Result<Params<'a>, LoadError> {
-        Params::new(el, self.ids)
+        Params::new(el, self.ids, self.doc)
+    }
+
+    /// The document the plugin is in (file lookup, objects shared between references).
+    pub fn doc(&self) -> &'a Document {
+        self.doc
     }
 
     /// The parameter element called `name`, marked as read.

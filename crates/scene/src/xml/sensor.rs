@@ -22,7 +22,8 @@ const MAX_RESOLUTION: i32 = 1 << 16;
 ///
 /// `perspective` parameters (Mitsuba 3 defaults): `fov` in degrees with `fov_axis` (`x`), or
 /// `focal_length` (`"50mm"`, on a 36x24 mm film, measured along the diagonal) when no `fov`
-/// is given; `near_clip` (0.01), `far_clip` (10000), `to_world` (identity; no scaling).
+/// is given; `near_clip` (0.01), `far_clip` (10000), `focus_distance` (`far_clip`; no effect on
+/// a pinhole), `to_world` (identity; no scaling).
 pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera, u32), LoadError> {
     let p = b.params(el)?;
     let (width, height, filter) = match single(&p, "film")? {
@@ -49,6 +50,10 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera,
             format!("'far_clip' ({far_clip}) must be larger than 'near_clip' ({near_clip})"),
         ));
     }
+    // Mitsuba 3 reads `focus_distance` (default `far_clip`) in every projective camera and
+    // uses it only in `thinlens`: a pinhole is in focus everywhere. Read to be checked, then
+    // dropped.
+    p.float("focus_distance", far_clip)?;
     let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
     // As Mitsuba 3: rays would be mis-scaled (and the clip distances wrong).
     if uniform_scale(&to_world).is_none_or(|s| (s - 1.0).abs() > 1e-3) {

@@ -1,15 +1,16 @@
-//! Shape plugins `sphere`, `cube`, `rectangle`, `disk`, `obj` and `ply`, with their BSDF,
+//! Shape plugins `sphere`, `cube`, `rectangle`, `disk`, `cylinder`, `obj`, `ply`, `serialized`,
+//! `shapegroup` and `instance`, with their BSDF,
 //! interior/exterior media and area emitter.
 
 use super::context::Builder;
 use super::document::Element;
 use super::params::Params;
 use super::transform::uniform_scale;
-use super::{bsdfs, emitters, obj, ply, LoadError};
+use super::{bsdfs, emitters, obj, ply, serialized, LoadError};
 use crate::bsdf::Bsdf;
 use crate::emitter::Emitter;
 use crate::medium::MediumId;
-use crate::shape::{cube_mesh, rectangle_mesh, Geometry, Shape, TriangleMesh};
+use crate::shape::{cube_mesh, cylinder_mesh, rectangle_mesh, Geometry, Shape, TriangleMesh};
 use glam::{Mat3, Mat4, Vec3};
 use haze_core::Rgb;
 
@@ -18,10 +19,64 @@ use haze_core::Rgb;
 /// Every shape takes `to_world` (identity) and `flip_normals` (false); one `<bsdf>` (nested or
 /// `<ref>`; Mitsuba 3's default is `diffuse` with reflectance 0.5); media named `interior`
 /// and `exterior` (nested `<medium name="interior">` or `<ref name="interior" id=".."/>`);
-/// and one nested `<emitter type="area">`.
+/// and one `<emitter type="area">` (nested, or declared at the top level with an id and
+/// referenced).
 pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), LoadError> {
-    let p = b.params(el)?;
+    build_placed(b, el, None)
+}
+
+/// Mitsuba 3's instancing: a `shapegroup` (with an id) holds shapes and is not rendered itself;
+/// each `instance` referring to it adds a copy of its shapes, each placed by the instance's
+/// `to_world` after its own. haze copies the geometry (no instancing in the BVH). As in
+/// Mitsuba 3, instanced shapes cannot emit, and groups do not nest.
+fn instance<'a>(b: &mut Builder<'a>, p: &Params<'a>) -> Result<(), LoadError> {
     let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let groups = p.objects(&["shape"]);
+    let group = match groups[..] {
+        [one] => one,
+        [] => return Err(p.element().error("an instance needs a <ref> to a shapegroup")),
+        [_, second, ..] => return Err(second.site.error("an instance refers to one shapegroup")),
+    };
+    let gp = p.nested(group.target)?;
+    if gp.ty() != "shapegroup" {
+        return Err(group
+            .site
+            .error(format!("an instance refers to a shapegroup, not a '{}' shape", gp.ty())));
+    }
+    p.finish()?;
+    let number = b.shapes.len();
+    for member in gp.objects(&["shape"]) {
+        build_placed(b, member.target, Some((to_world, number)))?;
+    }
+    gp.finish()
+}
+
+/// [`build`], for a shape placed by an instance: `(to_world, number)` is the instance's
+/// transform, applied after the shape's own, and a number naming the copy.
+fn build_placed<'a>(
+    b: &mut Builder<'a>,
+    el: &'a Element,
+    placed: Option<(Mat4, usize)>,
+) -> Result<(), LoadError> {
+    let p = b.params(el)?;
+    match (p.ty(), placed) {
+        ("shapegroup", None) => {
+            // Checked member by member where an instance places it.
+            for o in p.objects(&["shape"]) {
+                if o.target.attr("type").is_some_and(|t| t == "shapegroup" || t == "instance") {
+                    return Err(o.site.error("shapegroups do not nest (as in Mitsuba 3)"));
+                }
+            }
+            return p.finish();
+        }
+        ("instance", None) => return instance(b, &p),
+        ("shapegroup" | "instance", Some(_)) => {
+            return Err(el.error("shapegroups do not nest (as in Mitsuba 3)"));
+        }
+        _ => {}
+    }
+    let own = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+    let to_world = placed.map_or(own, |(outer, _)| outer * own);
     let flip_normals = p.bool("flip_normals", false)?;
     let geometry = match p.ty() {
         "sphere" => sphere(&p, &to_world, flip_normals)?,
@@ -33,6 +88,7 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), Load
             require_planar_rank(&p, &to_world)?;
             Geometry::Mesh(rectangle_mesh(&to_world, flip_normals))
         }
+        "cylinder" => cylinder(&p, &to_world, flip_normals)?,
         "disk" => {
             require_planar_rank(&p, &to_world)?;
             Geometry::Disk { to_world, flip_normals }
@@ -73,11 +129,11 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), Load
                 *slot = Some(b.medium(o.target)?);
             }
             _ => {
-                if o.site.tag == "ref" {
-                    return Err(o.site.error("an area emitter must be nested in its shape, not referenced"));
-                }
                 if radiance.is_some() {
                     return Err(twice("<emitter>"));
+                }
+                if placed.is_some() {
+                    return Err(o.site.error("a shape in a shapegroup cannot emit (as in Mitsuba 3)"));
                 }
                 let ep = p.nested(o.target)?;
                 if ep.ty() != "area" {
@@ -98,14 +154,17 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(), Load
         (b.emitters.len() - 1) as u32
     });
     let filename = match p.ty() {
-        "obj" | "ply" => p.string_opt("filename")?,
+        "obj" | "ply" | "serialized" => p.string_opt("filename")?,
         _ => None,
     };
-    let name = match (el.attr("id"), filename) {
+    let mut name = match (el.attr("id"), filename) {
         (Some(id), _) => id.to_string(),
         (None, Some(file)) => format!("{} \"{file}\"", p.ty()),
         (None, None) => p.ty().to_string(),
     };
+    if let Some((_, number)) = placed {
+        name.push_str(&format!(" (instance at shape {number})"));
+    }
     b.shapes.push(Shape {
         name,
         geometry,
@@ -129,6 +188,30 @@ fn sphere(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, L
         p.error_at("to_world", "a sphere's to_world may only rotate, translate and scale uniformly")
     })?;
     Ok(Geometry::Sphere { center: to_world.transform_point3(center), radius: radius * scale, flip_normals })
+}
+
+/// `cylinder`: `p0` (origin), `p1` (0, 0, 1), `radius` (1): Mitsuba 3's open tube around the
+/// segment `p0 p1`, then `to_world`; tessellated ([`cylinder_mesh`]). The frame around the
+/// axis (where `u = 0` lies) is glam's `any_orthonormal_pair`, not necessarily Mitsuba's.
+fn cylinder(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, LoadError> {
+    let p0 = p.point_opt("p0")?.unwrap_or(Vec3::ZERO);
+    let p1 = p.point_opt("p1")?.unwrap_or(Vec3::Z);
+    let radius = p.float("radius", 1.0)?;
+    if radius <= 0.0 {
+        return Err(p.error_at("radius", format!("'radius' must be > 0, got {radius}")));
+    }
+    let axis = p1 - p0;
+    let length = axis.length();
+    if length.is_nan() || length <= 0.0 {
+        return Err(p.error_at("p1", "'p0' and 'p1' must differ"));
+    }
+    let d = axis / length;
+    let (x, y) = d.any_orthonormal_pair();
+    let local =
+        Mat4::from_cols((x * radius).extend(0.0), (y * radius).extend(0.0), axis.extend(0.0), p0.extend(1.0));
+    let placed = *to_world * local;
+    require_invertible(p, &placed)?;
+    Ok(Geometry::Mesh(cylinder_mesh(&placed, flip_normals)))
 }
 
 /// Geometry must lie within `MAX_COORDINATE` of the origin (the BVH cannot hold larger
@@ -197,9 +280,10 @@ fn require_planar_rank(p: &Params, to_world: &Mat4) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// `obj` and `ply`: `filename` (required; relative to the scene file's directory),
+/// `obj`, `ply` and `serialized`: `filename` (required; relative to the scene file's directory),
 /// `face_normals` (false: keep the file's vertex normals), `flip_tex_coords` (Mitsuba 3
-/// defaults: true for OBJ, false for PLY). Positions go to world space with `to_world`,
+/// defaults: true for OBJ, false for PLY; `serialized` has none), `shape_index` (`serialized`
+/// only: which mesh of the file, 0). Positions go to world space with `to_world`,
 /// normals with its inverse transpose.
 fn mesh_file(
     b: &Builder,
@@ -210,13 +294,25 @@ fn mesh_file(
     let filename =
         p.string_opt("filename")?.ok_or_else(|| p.element().error("missing parameter 'filename'"))?;
     let face_normals = p.bool("face_normals", false)?;
-    let flip_tex_coords = p.bool("flip_tex_coords", p.ty() == "obj")?;
+    let flip_tex_coords = p.ty() != "serialized" && p.bool("flip_tex_coords", p.ty() == "obj")?;
+    let shape_index = match p.ty() {
+        "serialized" => {
+            let i = p.int("shape_index", 0)?;
+            u32::try_from(i)
+                .map_err(|_| p.error_at("shape_index", format!("'shape_index' must be >= 0, got {i}")))?
+        }
+        _ => 0,
+    };
     let linear = require_invertible(p, to_world)?;
     let path = b.doc.resolve(filename, p.element());
-    let load = if p.ty() == "obj" { obj::load } else { ply::load };
+    let load = |path: &std::path::Path| match p.ty() {
+        "obj" => obj::load(path),
+        "ply" => ply::load(path),
+        _ => serialized::load(path, shape_index),
+    };
     // The mesh parsers are third-party code; some index arithmetic in them can overflow (a
     // panic in debug builds) on hostile files. A bad file must be an error, never a crash.
-    let loaded = std::panic::catch_unwind(|| load(&path))
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| load(&path)))
         .unwrap_or_else(|_| Err("the file is malformed (the parser gave up)".to_string()));
     let mut mesh = loaded
         .and_then(|m| check_mesh(&m).map(|()| m))

@@ -1,25 +1,63 @@
-//! Texture plugin `checkerboard`, and reading a reflectance parameter that may be a spectrum
+//! Texture plugins `checkerboard` and `bitmap`, and reading a reflectance parameter that may be a spectrum
 //! or a `<texture>` (nested or referenced), as Mitsuba 3's `props.texture(name)` does.
 
 use super::params::Params;
 use super::LoadError;
+use crate::bitmap::{Bitmap, FilterType, WrapMode};
 use crate::texture::{affine2_from_mat4, Texture};
 use glam::Mat4;
 use haze_core::Rgb;
+use std::sync::Arc;
 
 /// Builds a `<texture>`.
 /// - `checkerboard`: `color0` (Mitsuba 3 default 0.4), `color1` (0.2), `to_uv` (identity),
 ///   applied to the surface `uv` before the pattern.
+/// - `bitmap`: `filename` (required: PNG, JPEG, OpenEXR or Radiance HDR), `filter_type`
+///   (`bilinear`; or `nearest`), `wrap_mode` (`repeat`; or `mirror`, `clamp`), `raw` (false:
+///   8- and 16-bit images are sRGB-decoded), `to_uv` (identity); `format` and `accel` are
+///   storage and GPU choices of Mitsuba 3's, checked and ignored. See [`crate::bitmap`].
 pub(super) fn build(p: &Params) -> Result<Texture, LoadError> {
-    // `checkerboard` is the only texture type in the plugin table; `Params::new` rejects others.
-    let color0 = p.spectrum("color0", Rgb::splat(0.4))?;
-    let color1 = p.spectrum("color1", Rgb::splat(0.2))?;
     let to_uv = p.transform_opt("to_uv")?.unwrap_or(Mat4::IDENTITY);
     if !to_uv.is_finite() {
         return Err(p.error_at("to_uv", "'to_uv' must be finite"));
     }
+    let to_uv = affine2_from_mat4(to_uv);
+    if p.ty() == "bitmap" {
+        return bitmap(p, to_uv);
+    }
+    let color0 = p.spectrum("color0", Rgb::splat(0.4))?;
+    let color1 = p.spectrum("color1", Rgb::splat(0.2))?;
     p.finish()?;
-    Ok(Texture::Checkerboard { color0, color1, to_uv: affine2_from_mat4(to_uv) })
+    Ok(Texture::Checkerboard { color0, color1, to_uv })
+}
+
+fn bitmap(p: &Params, to_uv: glam::Affine2) -> Result<Texture, LoadError> {
+    let filename =
+        p.string_opt("filename")?.ok_or_else(|| p.element().error("missing parameter 'filename'"))?;
+    let choice = |name: &str, default: &str, known: &str| -> Result<String, LoadError> {
+        let v = p.string_opt(name)?.unwrap_or(default);
+        if !known.split(", ").any(|k| k == v) {
+            return Err(p.error_at(name, format!("unknown {name} '{v}' (supported: {known})")));
+        }
+        Ok(v.to_string())
+    };
+    let filter = FilterType::from_name(&choice("filter_type", "bilinear", "bilinear, nearest")?);
+    let wrap = WrapMode::from_name(&choice("wrap_mode", "repeat", "repeat, mirror, clamp")?);
+    choice("format", "auto", "auto, variant, float16, uint8")?;
+    p.bool("accel", true)?;
+    let raw = p.bool("raw", false)?;
+    p.finish()?;
+    let (Some(filter), Some(wrap)) = (filter, wrap) else {
+        return Err(p.element().error("internal: filter or wrap mode without a name"));
+    };
+    if let Some(b) = p.doc().bitmaps.borrow().get(&p.element().uid) {
+        return Ok(Texture::Bitmap(b.clone()));
+    }
+    let path = p.doc().resolve(filename, p.element());
+    let b = Bitmap::load(&path, raw, filter, wrap, to_uv).map_err(|m| p.error_at("filename", m))?;
+    let b = Arc::new(b);
+    p.doc().bitmaps.borrow_mut().insert(p.element().uid, b.clone());
+    Ok(Texture::Bitmap(b))
 }
 
 /// The parameter `name` of plugin `p`: a spectrum (`<rgb>`, `<spectrum>`, `<float>`), a
