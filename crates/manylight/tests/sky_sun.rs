@@ -1,0 +1,151 @@
+//! Sky and sun in the many-light integrators (issue 36): `vrl`, `vpl`, `vrl_lightcuts` and
+//! `vpl_lightcuts` against `volpath`, every component by the per-pixel z-test and the image-mean
+//! z from the per-pass spread (`compare_support`, as in `integrators.rs`), on small scenes lit
+//! only by environment and directional emitters (`tests/data/sky-sun/`):
+//! (a) `sky-fog.xml`, a fog box on a diffuse floor under a `constant` sky;
+//! (b) `envmap-fog.xml`, the same under an `envmap` with a small, bright sun;
+//! (c) `sun-window.xml`, a `directional` sun through the window of a closed room of fog;
+//! (d) `cloud-sky.xml`, a heterogeneous cloud under a `directional` sun and a `constant` sky;
+//! and the path-length rule on `sky-glass.xml` (the sky-lit fog with a glass ball before it) at
+//! `max_depth` 2, 3, 6 and -1: each many-light method must estimate exactly volpath's sum.
+//!
+//! Each test first checks that `volpath` renders the scene (finite, not black, the expected
+//! components present), then compares the many-light methods with it. The negative control of
+//! each scene test: `vrl_lightcuts`'s image scaled by 0.9 (what a light-tracing normalisation,
+//! such as the disk's pdf, off by 10% does to the light-traced components) must fail the same
+//! test on `multiple` or `surface`, so the test has the power to see such an error.
+
+mod compare_support;
+
+use compare_support::*;
+use haze_render::Component;
+use haze_scene::{load_file, LoadOptions, Scene};
+
+/// Scene `name` of `tests/data/sky-sun/` at `res x res` pixels with the `-D` overrides `defines`.
+fn load(name: &str, res: u32, defines: &[(&str, &str)]) -> Scene {
+    let path = haze_testkit::data::repo_root().join("tests/data/sky-sun").join(name);
+    let mut all = vec![("res".to_string(), res.to_string())];
+    all.extend(defines.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+    load_file(&path, &LoadOptions { defines: all }).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `volpath`'s reference of `scene`, checked: finite (`render_passes` asserts no invalid
+/// sample), every component non-negative, the whole image not black and each component of
+/// `present` contributing.
+fn checked_reference(scene: &Scene, label: &str, present: &[Component]) -> Passes {
+    let reference = volpath_reference(scene);
+    for comp in Component::ALL {
+        let mean = reference.film.mean(Some(comp));
+        assert!(mean.iter().all(|v| v.is_finite() && *v >= 0.0), "{label}volpath {}", comp.name());
+    }
+    let total = reference.film.image_mean(None);
+    println!("{label}volpath image mean {total:?}");
+    assert!(total.iter().all(|v| *v > 0.0), "{label}volpath renders black: {total:?}");
+    for &comp in present {
+        let m = reference.film.image_mean(Some(comp));
+        assert!(m.iter().all(|v| *v > 0.0), "{label}volpath has no {} light: {m:?}", comp.name());
+    }
+    reference
+}
+
+/// The negative control: `vrl_lightcuts` (`paths` light paths, `passes` passes) with its image
+/// scaled by 0.9 must fail the comparison with `reference` on `multiple` or `surface`.
+fn check_control(scene: &Scene, reference: &Passes, label: &str, paths: u64, passes: u32) {
+    let (mut wrong, _) = lightcut_renders(scene, paths, passes, Default::default(), [5, 6]);
+    wrong.film.scale(0.9);
+    for m in &mut wrong.pass_means {
+        for v in m.iter_mut().flatten() {
+            *v *= 0.9;
+        }
+    }
+    let mut caught = Vec::new();
+    for comp in [Component::Multiple, Component::Surface] {
+        let (r, mean_z) = compare(&wrong, reference, comp);
+        println!("{label}vrl_lightcuts x 0.9, {}: {r}; image-mean z = {mean_z:.2}", comp.name());
+        if r.failed_fraction() > 0.01 || mean_z.abs() > 5.0 {
+            caught.push(comp.name());
+        }
+    }
+    assert!(!caught.is_empty(), "{label}: vrl_lightcuts 10% too dark went unnoticed");
+}
+
+/// The whole check of one scene: the reference, the four many-light methods against it and the
+/// negative control.
+fn check_scene(scene: &Scene, label: &str, present: &[Component], paths: u64, passes: u32) {
+    let reference = checked_reference(scene, label, present);
+    check_methods_against(scene, &reference, label, paths, passes, true);
+    check_control(scene, &reference, label, paths, passes);
+}
+
+/// (a) A constant sky only: light paths start on the disk covering the scene's bounding sphere,
+/// in the fog (VRLs) and on the floor (surface VPLs, which light the fog from below).
+#[test]
+fn constant_sky_fog_matches_volpath() {
+    let scene = load("sky-fog.xml", 20, &[]);
+    let present = [Component::Emitted, Component::Single, Component::Multiple, Component::Surface];
+    check_scene(&scene, "sky-fog ", &present, 40, 48);
+}
+
+/// (b) An environment map with a sun of one bright pixel: light directions from the map's
+/// importance table, so most light paths carry the sun.
+#[test]
+fn envmap_sun_fog_matches_volpath() {
+    let scene = load("envmap-fog.xml", 20, &[]);
+    let present = [Component::Emitted, Component::Single, Component::Multiple, Component::Surface];
+    check_scene(&scene, "envmap-fog ", &present, 40, 48);
+}
+
+/// (c) A directional sun through a window into a closed room of fog: the only light enters by
+/// the window (a few percent of the disk's paths), a shaft through the fog and a lit patch on
+/// the floor.
+#[test]
+fn directional_sun_through_window_matches_volpath() {
+    let scene = load("sun-window.xml", 20, &[]);
+    let present = [Component::Single, Component::Multiple, Component::Surface];
+    check_scene(&scene, "sun-window ", &present, 200, 48);
+}
+
+/// (d) A heterogeneous cloud under a directional sun and a constant sky (delta-tracked light
+/// paths from both, VRLs carrying their transmittance).
+#[test]
+fn cloud_under_sun_and_sky_matches_volpath() {
+    let scene = load("cloud-sky.xml", 20, &[]);
+    let present = [Component::Emitted, Component::Single, Component::Multiple];
+    check_scene(&scene, "cloud-sky ", &present, 40, 48);
+}
+
+/// The path-length rule: at `max_depth` (Mitsuba's: the longest path has `max_depth` segments;
+/// 2 is single scattering and direct light only) every many-light method estimates the sum
+/// `volpath` computes, on the sky-lit fog seen through a glass ball (camera-side delta events
+/// count towards the depth as in volpath).
+fn check_max_depth(max_depth: i32, present: &[Component]) {
+    let depth = max_depth.to_string();
+    let scene = load("sky-glass.xml", 16, &[("max_depth", &depth)]);
+    assert_eq!(scene.integrator.max_depth, max_depth);
+    let label = format!("sky-glass max_depth {max_depth} ");
+    let reference = checked_reference(&scene, &label, present);
+    check_methods_against(&scene, &reference, &label, 40, 48, true);
+}
+
+#[test]
+fn max_depth_2_matches_volpath() {
+    check_max_depth(2, &[Component::Emitted, Component::Single, Component::Surface]);
+}
+
+#[test]
+fn max_depth_3_matches_volpath() {
+    let present = [Component::Emitted, Component::Single, Component::Multiple, Component::Surface];
+    check_max_depth(3, &present);
+}
+
+#[test]
+fn max_depth_6_matches_volpath() {
+    let present = [Component::Emitted, Component::Single, Component::Multiple, Component::Surface];
+    check_max_depth(6, &present);
+}
+
+#[test]
+fn max_depth_unlimited_matches_volpath() {
+    let present = [Component::Emitted, Component::Single, Component::Multiple, Component::Surface];
+    check_max_depth(-1, &present);
+}
