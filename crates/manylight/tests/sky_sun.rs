@@ -157,3 +157,36 @@ fn max_depth_unlimited_matches_volpath() {
     let present = [Component::Emitted, Component::Single, Component::Multiple, Component::Surface];
     check_max_depth(-1, &present);
 }
+
+/// The path-length rule with an area light (no environment), so that a failure here is the
+/// rule's and not the sky's: `tests/data/glass-ball-room.xml` (the hazy room with a glass ball
+/// of `integrators.rs`, whose test covers `max_depth` -1) at 16 x 12 pixels and `max_depth` 2,
+/// 3 and 6. Before issue 36's rule the many-light methods failed it at every one of them
+/// (`vrl_lightcuts`, per-pass image-mean z): at 2 with multiple scattering volpath does not
+/// count (0.0179 vs 0, z +43) and `surface` 3.2x too bright (z +24); at 3 `surface` 13% too
+/// bright (z +5.0); at 6 `multiple` 10% (z -4.5) and `surface` 23% (z -15) too dark.
+fn check_max_depth_area_light(max_depth: i32, present: &[Component]) {
+    let path = haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml");
+    let defines = [("res", "16"), ("res_y", "12")].map(|(k, v)| (k.to_string(), v.to_string()));
+    let mut scene =
+        load_file(&path, &LoadOptions { defines: defines.to_vec() }).unwrap_or_else(|e| panic!("{e}"));
+    scene.integrator.max_depth = max_depth;
+    let label = format!("glass-ball-room max_depth {max_depth} ");
+    let reference = checked_reference(&scene, &label, present);
+    check_methods_against(&scene, &reference, &label, 40, 200, true);
+}
+
+#[test]
+fn area_light_max_depth_2_matches_volpath() {
+    check_max_depth_area_light(2, &[Component::Single, Component::Surface]);
+}
+
+#[test]
+fn area_light_max_depth_3_matches_volpath() {
+    check_max_depth_area_light(3, &[Component::Single, Component::Multiple, Component::Surface]);
+}
+
+#[test]
+fn area_light_max_depth_6_matches_volpath() {
+    check_max_depth_area_light(6, &[Component::Single, Component::Multiple, Component::Surface]);
+}
