@@ -25,10 +25,11 @@ use crate::vrl::Segment;
 use glam::{Mat4, Vec2, Vec3};
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
+use haze_scene::hetero::MajorantDistance;
 use haze_scene::{Emitter, Scene};
 
-/// One-sample estimate of single scattering along `cs` from all emitters (`constant` emitters
-/// are excluded by `Scene::check_emission` before rendering). In a heterogeneous medium the
+/// One-sample estimate of single scattering along `cs` from all emitters (those at infinity by
+/// [`from_infinity`]). In a heterogeneous medium the
 /// equiangular distance is unchanged (it depends on geometry only) and the integrand's
 /// `T_c(u) sigma_s` and `Tr` are estimated (`docs/theory.md` §12.5).
 pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sampler) -> Rgb {
@@ -41,6 +42,10 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
     for i in 0..scene.emitters.len() {
         let u_light = sampler.next_2d();
         let u_dist = sampler.next_1d();
+        if scene.emitters[i].is_infinite() {
+            total += from_infinity(scene, cs, i, u_light, u_dist, sampler);
+            continue;
+        }
         let Some(light) = LightPoint::sample(scene, i, u_light) else { continue };
         // Where on the segment the light can arrive (module docs).
         let (a, b) = match &light.kind {
@@ -96,6 +101,87 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
         total += cs.tr_before * cam * sigma_s * tr * e_val * (phase / (dist * dist * pdf));
     }
     total
+}
+
+/// Share of the uniform distance in [`from_infinity`]'s mixture: keeps the pdf away from zero
+/// where the exponential or the majorant's distance is small but the light is not.
+const UNIFORM_SHARE: f32 = 0.2;
+
+/// Single scattering along `cs` from the emitter at infinity `i` (`constant`, `envmap`,
+/// `directional`, `docs/theory.md` §13): no point to aim at, so the distance `u` is drawn
+/// first, from the mixture of the uniform density on `[0, s]` (share [`UNIFORM_SHARE`]) and the
+/// density of the first collision, truncated to the segment (the exponential of the mean
+/// `sigma_t`, or in a heterogeneous medium the majorant's, T34), which follows `T_c(u)`; then a
+/// direction `w` towards the light as next-event estimation draws it
+/// ([`Scene::sample_direction_of`]: the sun's one direction, the envmap's table, the uniform
+/// sphere), and
+///
+/// ```text
+///   L_1 ~ T_c(u) sigma_s f_p(-w, -w_c) Tr(x_u -> infinity along w) L(w) / (p(u) p(w))
+/// ```
+///
+/// (a delta direction's `p(w)` is 1 and `L(w)` its irradiance). The same shadow transmittance
+/// as volpath's next-event estimation (`transmittance_to_sampled` with an infinite distance).
+fn from_infinity(
+    scene: &Scene,
+    cs: &CameraSegment,
+    i: usize,
+    u_light: Vec2,
+    u_dist: f32,
+    sampler: &mut Sampler,
+) -> Rgb {
+    let med = estimator_medium(scene, cs.medium);
+    let hetero = scene.medium(cs.medium).hetero.as_deref();
+    let len = cs.seg.len;
+    // The collision density: `(sample, pdf)` closures over the truncated exponential or the
+    // majorant's distance, or none (a thin segment: uniform alone).
+    let sigma = med.sigma_t.mean();
+    let majorant = hetero.and_then(|h| MajorantDistance::new(&h.majorants, cs.seg.o, cs.seg.d, len));
+    let exponential = hetero.is_none() && sigma * len > 1e-4 && sigma.is_finite();
+    let collision_pdf = |u: f32| -> f32 {
+        if let Some(m) = &majorant {
+            m.pdf(u)
+        } else if exponential {
+            sigma * (-sigma * u).exp() / -(-sigma * len).exp_m1()
+        } else {
+            1.0 / len
+        }
+    };
+    let u = if u_dist < UNIFORM_SHARE {
+        (u_dist / UNIFORM_SHARE) * len
+    } else {
+        let v = (u_dist - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE);
+        if let Some(m) = &majorant {
+            m.sample(v)
+        } else if exponential {
+            // Inversion of the truncated exponential: `-ln(1 - v (1 - e^{-sigma s})) / sigma`.
+            (-(-v * -(-sigma * len).exp_m1()).ln_1p() / sigma).min(len)
+        } else {
+            v * len
+        }
+    };
+    let pdf_u = UNIFORM_SHARE / len + (1.0 - UNIFORM_SHARE) * collision_pdf(u);
+    if !(pdf_u > 0.0 && pdf_u.is_finite()) {
+        return Rgb::ZERO;
+    }
+    let x = cs.seg.at(u);
+    let Some(es) = scene.sample_direction_of(i, 1.0, x, u_light, |_| true) else { return Rgb::ZERO };
+    if es.radiance.is_black() || !(es.pdf > 0.0) {
+        return Rgb::ZERO;
+    }
+    let phase = med.phase.eval(-es.wi, -cs.seg.d);
+    let (cam, sigma_s) = match &hetero {
+        None => (med.sigma_t.exp_neg(u), med.sigma_s),
+        Some(h) => {
+            let f = crate::hetero::along(h, &cs.seg, x, sampler);
+            if f.is_black() {
+                return Rgb::ZERO;
+            }
+            (f, Rgb::ONE)
+        }
+    };
+    let tr = transmittance_to_sampled(scene, x, None, es.wi, f32::INFINITY, Some(cs.medium), sampler);
+    cs.tr_before * cam * sigma_s * tr * es.radiance * (phase / (es.pdf * pdf_u))
 }
 
 /// The interval `[a, b]` of `seg`'s parameter where it is inside the cone of a spot light with
@@ -194,7 +280,8 @@ impl LightPoint {
                     kind: LightKind::Area { weighted_radiance: *radiance / s.pdf, n: s.n },
                 })
             }
-            Emitter::Constant { .. } | Emitter::EnvMap(_) => None,
+            // At infinity: `from_infinity`.
+            Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => None,
         }
     }
 

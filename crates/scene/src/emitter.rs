@@ -1,4 +1,4 @@
-//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`, `envmap`).
+//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`, `envmap`, `directional`).
 
 use crate::envmap::EnvMap;
 use glam::{Mat4, Vec3};
@@ -30,6 +30,10 @@ pub enum Emitter {
     Constant { radiance: Rgb },
     /// Radiance at infinity from a latitude-longitude image (see [`EnvMap`]).
     EnvMap(Arc<EnvMap>),
+    /// Mitsuba 3's `directional` (the sun): parallel light travelling along the unit direction
+    /// `d`, delivering `irradiance` (W/m^2) to a surface perpendicular to `d`. A delta light at
+    /// infinity: next-event estimation is the only way to it, no ray hits it.
+    Directional { d: Vec3, irradiance: Rgb },
 }
 
 impl Emitter {
@@ -73,15 +77,22 @@ impl Emitter {
 }
 
 impl Emitter {
-    /// True for emitters that no ray can hit by chance (`point`, `spot`): next-event estimation
+    /// True for emitters that no ray can hit by chance (`point`, `spot`, `directional`): next-event estimation
     /// is the only way to their light, so no MIS weight involves them.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Emitter::Point { .. } | Emitter::Spot { .. })
+        matches!(self, Emitter::Point { .. } | Emitter::Spot { .. } | Emitter::Directional { .. })
     }
 
-    /// True for emitters at infinity (`constant`, `envmap`).
+    /// True for the emitters that escaping rays see (`constant`, `envmap`): radiance at
+    /// infinity from every direction of their support.
     pub fn is_environment(&self) -> bool {
         matches!(self, Emitter::Constant { .. } | Emitter::EnvMap(_))
+    }
+
+    /// True for emitters at infinity (`constant`, `envmap`, `directional`): their light enters
+    /// the scene from outside its bounding sphere, from no point of it.
+    pub fn is_infinite(&self) -> bool {
+        self.is_environment() || matches!(self, Emitter::Directional { .. })
     }
 
     /// Radiance of an environment emitter arriving from the unit direction `d` (the direction

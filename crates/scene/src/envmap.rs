@@ -299,6 +299,23 @@ impl EnvMap {
         (top * (1.0 - fy) + bottom * fy, pdf)
     }
 
+    /// `Int L(w) dw` over the sphere, per channel: the pixels summed with their solid angles
+    /// (`2 pi / W * pi / H * sin(theta)` at the pixel row's centre). An approximation of the
+    /// bilinear map's integral, for choosing emitters by power (`emitter_tables.rs`) only.
+    pub fn radiance_integral(&self) -> Rgb {
+        let (w, h) = (self.width as f64, self.height as f64);
+        let mut sum = [0.0f64; 3];
+        for (j, row) in self.pixels.chunks_exact(self.width).enumerate() {
+            let omega = 2.0 * PI as f64 / w * PI as f64 / h * (PI as f64 * (j as f64 + 0.5) / h).sin();
+            for p in row {
+                for (c, s) in sum.iter_mut().enumerate() {
+                    *s += p[c] as f64 * omega;
+                }
+            }
+        }
+        Rgb::new(sum[0] as f32, sum[1] as f32, sum[2] as f32)
+    }
+
     /// Solid-angle pdf with which [`Self::sample`] returns the unit world direction `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
         self.eval_pdf(d).1

@@ -77,6 +77,21 @@ impl Scene {
         accept: impl Fn(Vec3) -> bool,
     ) -> Option<EmitterSample> {
         let (idx, sel) = self.select_emitter(u_select)?;
+        self.sample_direction_of(idx, sel, p, u, accept)
+    }
+
+    /// The direction sample of [`Self::sample_emitter_direction_if`] from the emitter `idx`,
+    /// chosen with probability `sel` (the pdf includes it; `sel = 1` for a sample of this
+    /// emitter alone, as single scattering from emitters at infinity takes one per emitter).
+    #[inline]
+    pub fn sample_direction_of(
+        &self,
+        idx: usize,
+        sel: f32,
+        p: Vec3,
+        u: Vec2,
+        accept: impl Fn(Vec3) -> bool,
+    ) -> Option<EmitterSample> {
         match &self.emitters[idx] {
             Emitter::Point { position, intensity } => {
                 let v = *position - p;
@@ -153,6 +168,15 @@ impl Scene {
                 is_delta: false,
                 emitter: idx as u32,
             }),
+            // The irradiance plays the part of a point light's `I / dist^2`.
+            Emitter::Directional { d, irradiance } => Some(EmitterSample {
+                wi: -*d,
+                dist: f32::INFINITY,
+                radiance: *irradiance,
+                pdf: sel,
+                is_delta: true,
+                emitter: idx as u32,
+            }),
         }
     }
 
@@ -225,19 +249,12 @@ pub struct EmissionSample {
 #[derive(Clone, Debug, PartialEq)]
 pub enum EmissionError {
     NoEmitters,
-    /// `constant` and `envmap` (environment) emitters have no finite emitting surface to start
-    /// paths from.
-    Environment,
 }
 
 impl std::fmt::Display for EmissionError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             EmissionError::NoEmitters => write!(f, "the scene has no emitters to trace light from"),
-            EmissionError::Environment => write!(
-                f,
-                "light tracing does not support 'constant' or 'envmap' (environment) emitters; use volpath for this scene"
-            ),
         }
     }
 }
@@ -245,14 +262,12 @@ impl std::fmt::Display for EmissionError {
 impl std::error::Error for EmissionError {}
 
 impl Scene {
-    /// Checks that every emitter can start light paths (heterogeneous media are fine:
-    /// `docs/theory.md` §12.5).
+    /// Checks that light paths can start: the scene has an emitter. Every kind starts light
+    /// paths (emitters at infinity from a disk outside the scene, [`Self::sample_infinite_emission`];
+    /// heterogeneous media are fine: `docs/theory.md` §12.5).
     pub fn check_emission(&self) -> Result<(), EmissionError> {
         if self.emitters.is_empty() {
             return Err(EmissionError::NoEmitters);
-        }
-        if self.emitters.iter().any(Emitter::is_environment) {
-            return Err(EmissionError::Environment);
         }
         Ok(())
     }
@@ -262,16 +277,18 @@ impl Scene {
         self.emitter_tables.area.get(emitter as usize)?.as_ref()
     }
 
-    /// Samples the start of a light path: an emitter chosen uniformly, a point on it and a
-    /// direction. Point lights emit uniformly over the sphere (`weight = 4 pi I N`), spot lights
-    /// uniformly in their cutoff cone (`weight = I falloff 2 pi (1 - cos_cutoff) N`), area lights
-    /// from a uniform point with a cosine-weighted direction on the normal side
-    /// (`weight = L pi A N`), `N` the number of emitters.
+    /// Samples the start of a light path: an emitter chosen by power
+    /// ([`EmitterTables::select_for_emission`](crate::emitter_tables::EmitterTables), probability
+    /// `P`), a point on it and a direction. With `sel = 1 / P`: point lights emit uniformly over
+    /// the sphere (`weight = 4 pi I sel`), spot lights uniformly in their cutoff cone
+    /// (`weight = I falloff 2 pi (1 - cos_cutoff) sel`), area lights from a uniform point with a
+    /// cosine-weighted direction on the normal side (`weight = L pi A sel`). Emitters at
+    /// infinity ([`Self::sample_infinite_emission`]) start on a disk outside the scene.
     pub fn sample_emission(&self, u_select: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         use haze_core::sampling::{sample_cosine_hemisphere, sample_uniform_cone, uniform_cone_pdf};
         use haze_core::Frame;
-        let (idx, _) = self.select_emitter(u_select)?;
-        let sel = self.emitters.len() as f32;
+        let (idx, p_select) = self.emitter_tables.select_for_emission(u_select)?;
+        let sel = 1.0 / p_select;
         match &self.emitters[idx] {
             Emitter::Point { position, intensity } => Some(EmissionSample {
                 p: *position,
@@ -306,8 +323,58 @@ impl Scene {
                     emitter: idx as u32,
                 })
             }
-            Emitter::Constant { .. } | Emitter::EnvMap(_) => None,
+            Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => self
+                .sample_infinite_emission(idx, u_pos, u_dir)
+                .map(|(p, d, w)| EmissionSample { p, d, n: None, weight: w * sel, emitter: idx as u32 }),
         }
+    }
+
+    /// The start of a light path from the emitter at infinity `idx` (`constant`, `envmap`,
+    /// `directional`), before the emitter choice: a direction of travel `d` (`-w`, with `w` the
+    /// direction towards the light drawn as next-event estimation draws it from `u_dir`:
+    /// uniform over the sphere, the envmap's importance table, the sun's one direction) and an
+    /// origin uniform on the disk of radius `r` (the [`BoundingSphere`]'s) perpendicular to
+    /// `d`, centred at `c - r d` upstream of the sphere's centre `c`. Every line of direction
+    /// `d` that meets the sphere crosses the disk once, with the position pdf `1 / (pi r^2)`,
+    /// so the flux per sample is (pbrt-v4's infinite lights, `SampleLe`; `docs/theory.md` §13)
+    ///
+    /// ```text
+    ///   weight = L(w) pi r^2 / p(w)        (directional: E pi r^2)
+    /// ```
+    ///
+    /// Returns `(origin, d, weight)`; `None` for other emitters or a black sample. The origin
+    /// lies outside the sphere, so the path enters the scene from outside.
+    ///
+    /// [`BoundingSphere`]: crate::emitter_tables::BoundingSphere
+    pub fn sample_infinite_emission(
+        &self,
+        idx: usize,
+        u_pos: Vec2,
+        u_dir: Vec2,
+    ) -> Option<(Vec3, Vec3, Rgb)> {
+        let (d, le_over_pdf) = match &self.emitters[idx] {
+            Emitter::Constant { radiance } => {
+                (-sample_uniform_sphere(u_dir), *radiance * (1.0 / uniform_sphere_pdf()))
+            }
+            Emitter::EnvMap(map) => {
+                let s = map.sample(u_dir)?;
+                if !(s.pdf > 0.0) {
+                    return None;
+                }
+                (-s.d, s.radiance * (1.0 / s.pdf))
+            }
+            Emitter::Directional { d, irradiance } => (*d, *irradiance),
+            _ => return None,
+        };
+        if le_over_pdf.is_black() || !le_over_pdf.is_finite() {
+            return None;
+        }
+        let sphere = self.emitter_tables.sphere;
+        let r = sphere.radius;
+        let q = haze_core::sampling::sample_uniform_disk_concentric(u_pos);
+        let frame = haze_core::Frame::from_normal(d);
+        let origin = sphere.center + r * (frame.to_world(Vec3::new(q.x, q.y, 0.0)) - d);
+        Some((origin, d, le_over_pdf * (haze_core::PI * r * r)))
     }
 
     /// Medium containing the point `p`, found by casting a ray and looking at the first shape

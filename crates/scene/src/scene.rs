@@ -4,7 +4,7 @@
 use crate::accel::{Accel, CameraGrid, Leaving, PreliminaryHit, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use crate::camera::Camera;
 use crate::emitter::Emitter;
-use crate::emitter_tables::EmitterTables;
+use crate::emitter_tables::{BoundingSphere, EmitterTables};
 use crate::interaction::SurfaceInteraction;
 use crate::medium::{Medium, MediumId};
 use crate::shape::convex::{self, ClearSides};
@@ -109,7 +109,7 @@ fn sealed_shapes(shapes: &[Shape], emitters: &[Emitter]) -> Vec<f32> {
         match e {
             Emitter::Point { position, .. } => points.push(*position),
             Emitter::Spot { to_world, .. } => points.push(to_world.transform_point3(Vec3::ZERO)),
-            Emitter::Constant { .. } | Emitter::EnvMap(_) => {}
+            Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => {}
             Emitter::Area { .. } => return vec![0.0; shapes.len()],
         }
     }
@@ -153,9 +153,10 @@ impl Scene {
         emitters: Vec<Emitter>,
     ) -> Self {
         let accel = Accel::build(&shapes);
-        let emitter_tables = EmitterTables::new(&emitters, &shapes);
+        let (lo, hi) = accel.bounds();
+        let emitter_tables = EmitterTables::new(&emitters, &shapes, BoundingSphere::around(lo, hi));
         let every_surface_blocks = shapes.iter().all(Shape::blocks_shadow_rays);
-        let every_emitter_at_infinity = emitters.iter().all(Emitter::is_environment);
+        let every_emitter_at_infinity = emitters.iter().all(Emitter::is_infinite);
         let every_emitter_delta = emitters.iter().all(Emitter::is_delta);
         let sealed = sealed_shapes(&shapes, &emitters);
         let sealed_media = sealed_media(&shapes, &sealed, media.len(), camera.medium);
@@ -324,6 +325,12 @@ impl Scene {
 
     pub fn medium(&self, id: MediumId) -> &Medium {
         &self.media[id as usize]
+    }
+
+    /// The sphere around the scene's geometry through which light from infinity enters
+    /// ([`BoundingSphere::around`] [`Self::bounds`]).
+    pub fn bounding_sphere(&self) -> BoundingSphere {
+        self.emitter_tables.sphere
     }
 
     /// Axis-aligned bounds of all finite geometry.

@@ -1,4 +1,4 @@
-//! Emitter plugins `point`, `spot`, `constant`, `envmap`, and `area` (inside a shape).
+//! Emitter plugins `point`, `spot`, `constant`, `envmap`, `directional`, and `area` (inside a shape).
 
 use super::document::Document;
 use super::params::Params;
@@ -18,6 +18,9 @@ use std::sync::Arc;
 /// - `envmap`: `filename` (required; an OpenEXR or Radiance HDR latitude-longitude image,
 ///   found through the `<path>` folders like any file), `scale` 1, `to_world` (identity; a
 ///   rotation, without scaling).
+/// - `directional`: `irradiance` 1 (W/m^2, on a surface facing the light); the direction of
+///   travel from `direction`, or else local `+z` of `to_world` (either, not both; default
+///   `+z`), normalised.
 ///
 /// haze emitters take no medium: a `<medium>` or `<ref>` to one inside an emitter is an
 /// "unsupported" error rather than silently ignored.
@@ -80,6 +83,25 @@ pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
             let path = doc.resolve(filename, p.element());
             let map = EnvMap::load(&path, scale, to_world).map_err(|m| p.error_at("filename", m))?;
             Emitter::EnvMap(Arc::new(map))
+        }
+        "directional" => {
+            let d = match (p.point_opt("direction")?, p.transform_opt("to_world")?) {
+                (Some(_), Some(_)) => {
+                    return Err(p.error_at("to_world", "give either 'direction' or 'to_world', not both"))
+                }
+                (Some(d), None) => d,
+                (None, Some(m)) => m.transform_vector3(Vec3::Z),
+                (None, None) => Vec3::Z,
+            };
+            let len = d.length();
+            if !(len > 1e-20 && len.is_finite()) {
+                let name = if p.raw("direction").is_some() { "direction" } else { "to_world" };
+                return Err(p.error_at(
+                    name,
+                    format!("the directional emitter's direction must not be zero, got {d}"),
+                ));
+            }
+            Emitter::Directional { d: d / len, irradiance: non_negative(p, "irradiance")? }
         }
         // Shapes build area emitters; the builder rejects them elsewhere.
         _ => return Err(p.element().error("an area emitter must be nested inside the <shape> that emits")),

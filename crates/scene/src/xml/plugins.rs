@@ -86,6 +86,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("emitter", "area", &["radiance"]),
     ("emitter", "constant", &["radiance"]),
     ("emitter", "envmap", &["filename", "scale", "to_world"]),
+    ("emitter", "directional", &["direction", "irradiance", "to_world"]),
 ];
 
 /// Every supported `(kind, type, parameters)`; see [`PluginEntry`].
