@@ -185,6 +185,7 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
                 .iter()
                 .map(|r| {
                     let v = Vrl {
+                        events: 0,
                         seg: Segment::new(r.o, r.d, r.len),
                         flux: r.beta,
                         ratio: r.ratio,

@@ -13,6 +13,8 @@ pub struct CameraSegment {
     /// Camera-path throughput at `seg.o`: transmittance of the media crossed before this
     /// interval times the delta surfaces' sampling weights (`gather.rs`).
     pub tr_before: Rgb,
+    /// Scattering events of the camera path before this segment (`crate::depth`).
+    pub events: u32,
 }
 
 /// Most gathering segments kept per camera chain; a chain crossing more boundaries than this

@@ -30,6 +30,8 @@ pub struct GatherPoint<'a> {
     pub wi: Vec3,
     pub bsdf: &'a Bsdf,
     pub uv: Vec2,
+    /// Scattering events of the camera path before this point (`crate::depth`).
+    pub events: u32,
 }
 
 impl GatherPoint<'_> {
@@ -163,13 +165,20 @@ fn walk(
     out: &mut PathRadiance,
 ) {
     let max_events = haze_scene::depth_limit(scene.integrator.max_depth);
+    // The most events a path may have (`max_depth - 1`, crate::depth).
+    let max_light_path = crate::depth::max_events(scene);
     loop {
         let end = walk_chain(scene, &mut st, max_events, sampler, chain, out);
         let seen_directly = std::mem::replace(&mut st.direct, false);
         st.skip_area_emitters = false;
         st.may_split = None;
         for ChainSegment { cs, after_surface, .. } in chain.iter().filter(|c| !c.gathered) {
-            let single = crate::single::single_scattering(scene, cs, sampler);
+            // Next-event estimation on the segment makes paths of `c + 1` events (crate::depth).
+            let single = if cs.events < max_light_path {
+                crate::single::single_scattering(scene, cs, sampler)
+            } else {
+                Rgb::ZERO
+            };
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
             let [medium_only, after] = gather.segment(cs, key);
             let (c_single, c_multiple) = if *after_surface {
@@ -207,19 +216,27 @@ fn walk(
             let shape = &scene.shapes[h.shape as usize];
             let frame = Frame::from_normal(h.ns);
             let wi = frame.to_local(-st.ray.d);
-            let nee = surface_nee(scene, sampler, h, &frame, wi, st.medium, SurfaceMis::None);
+            // Next-event estimation here makes paths of `c + 1` events (crate::depth).
+            let nee = if st.events < max_light_path {
+                surface_nee(scene, sampler, h, &frame, wi, st.medium, SurfaceMis::None)
+            } else {
+                Rgb::ZERO
+            };
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
-            let gp = GatherPoint { p: h.p, n: h.n, frame, wi, bsdf: &shape.bsdf, uv: h.uv };
+            let gp =
+                GatherPoint { p: h.p, n: h.n, frame, wi, bsdf: &shape.bsdf, uv: h.uv, events: st.events };
             out.add(Component::Surface, st.beta * (nee + gather.point(&gp, key)));
             frame_wi = Some((frame, wi));
         }
         // Continue from one gathering vertex of the chain, chosen uniformly.
         let scattering = chain.iter().filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black()).count();
         let candidates = scattering + hit.is_some() as usize;
-        if candidates == 0 || st.events + 1 >= max_events {
+        // The continuation's vertex is an event after those before it: a segment's own count
+        // (delta vertices may separate a chain's segments) or the gathering point's.
+        let fewest = chain.iter().map(|c| c.cs.events).chain(hit.is_some().then_some(st.events)).min();
+        if candidates == 0 || fewest.is_none_or(|c| c + 1 >= max_events) {
             return;
         }
-        st.events += 1;
         let k = ((sampler.next_1d() * candidates as f32) as usize).min(candidates - 1);
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
         if k < scattering {
@@ -228,6 +245,10 @@ fn walk(
                 .filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black())
                 .nth(k)
                 .expect("k < count");
+            st.events = c.cs.events + 1;
+            if st.events >= max_events {
+                return;
+            }
             st.skip_area_emitters = c.direct && gather.splats_caustics();
             // A uniform point of the segment, pdf 1/len; phase sampling is exact (weight 1).
             let cs = c.cs;
@@ -253,6 +274,10 @@ fn walk(
             st.medium = Some(cs.medium);
         } else {
             st.skip_area_emitters = seen_directly && gather.splats_caustics();
+            st.events += 1;
+            if st.events >= max_events {
+                return;
+            }
             let (Some(h), Some((frame, wi))) = (hit, frame_wi) else { return };
             let shape = &scene.shapes[h.shape as usize];
             let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return };
@@ -285,6 +310,7 @@ fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample
         ray: Ray::new(offset_origin(h.p, h.n, d), d),
         medium: shape.medium_towards(d, h.n, st.medium),
         beta: st.beta * bs.weight,
+        events: st.events + !bs.null as u32,
         surface_seen: true,
         gathering: st.gathering || !bs.null,
         direct: st.direct && bs.null,
@@ -305,12 +331,16 @@ fn walk_chain(
     chain: &mut Vec<ChainSegment>,
     out: &mut PathRadiance,
 ) -> ChainEnd {
+    // A branch of a split, or a thin sheet's reflection, may arrive past the limit.
+    if st.events >= max_events {
+        return ChainEnd::Stop;
+    }
     for _ in 0..10_000 {
         let hit = scene.intersect(&st.ray);
         let len = hit.map_or(st.ray.t_max, |h| h.t);
         if let Some(m) = st.medium {
             let segment = |seg: Segment| ChainSegment {
-                cs: CameraSegment { seg, medium: m, tr_before: st.beta },
+                cs: CameraSegment { seg, medium: m, tr_before: st.beta, events: st.events },
                 after_surface: st.surface_seen,
                 direct: st.direct,
                 gathered: false,
@@ -359,8 +389,10 @@ fn walk_chain(
         if !shape.bsdf.is_specular() {
             return ChainEnd::Surface(h);
         }
-        st.events += 1;
-        if st.events >= max_events {
+        // A delta vertex is an event unless its sample is `null` (a thin sheet's straight
+        // transmission, as volpath counts it): `after_delta` counts it; the walk ends where no
+        // further vertex could be an event within the limit.
+        if st.events + 1 >= max_events && !shape.bsdf.may_pass_through() {
             return ChainEnd::Stop;
         }
         let frame = Frame::from_normal(h.ns);
@@ -388,6 +420,9 @@ fn walk_chain(
             return ChainEnd::Stop;
         };
         *st = after_delta(st, &h, &frame, &bs, scene);
+        if st.events >= max_events {
+            return ChainEnd::Stop;
+        }
         if st.events > RR_EVENTS {
             let q = st.beta.max_component().min(0.95);
             if sampler.next_1d() >= q {

@@ -6,6 +6,7 @@
 //! - [`lighttrace`]: light tracing that turns light-path segments into VRLs and vertices into VPLs.
 
 pub mod camera;
+pub mod depth;
 pub mod gather;
 mod hetero;
 pub mod integrators;

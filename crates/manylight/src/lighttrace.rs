@@ -59,6 +59,8 @@ pub struct VrlRecord {
     /// True if the light path bounced off a non-null surface before this segment: paths through
     /// it belong to the `surface` component.
     pub after_surface: bool,
+    /// Scattering events of the light path before this segment (`crate::depth`).
+    pub events: u32,
 }
 
 impl VrlRecord {
@@ -100,6 +102,7 @@ impl VrlRecord {
             flux: self.beta,
             ratio: self.ratio,
             medium: self.medium,
+            events: self.events,
         }
     }
 }
@@ -107,7 +110,13 @@ impl VrlRecord {
 impl VplRecord {
     /// The VPL the estimators take.
     pub fn to_vpl(&self) -> crate::vpl::Vpl {
-        crate::vpl::Vpl { p: self.p, d_in: self.d_in, flux: self.flux, medium: self.medium }
+        crate::vpl::Vpl {
+            p: self.p,
+            d_in: self.d_in,
+            flux: self.flux,
+            medium: self.medium,
+            events: self.events,
+        }
     }
 }
 
@@ -121,6 +130,8 @@ pub struct VplRecord {
     pub flux: Rgb,
     pub medium: MediumId,
     pub after_surface: bool,
+    /// Scattering events of the light path before this vertex (`crate::depth`).
+    pub events: u32,
 }
 
 /// A non-delta surface vertex of a light path (not the emitter's own point): a surface VPL.
@@ -139,6 +150,8 @@ pub struct SurfaceVplRecord {
     pub uv: glam::Vec2,
     /// The medium the light path arrived in (the shape decides the medium of each side).
     pub medium: Option<MediumId>,
+    /// Scattering events of the light path before this vertex (`crate::depth`).
+    pub events: u32,
 }
 
 impl SurfaceVplRecord {
@@ -154,6 +167,7 @@ impl SurfaceVplRecord {
             shape: self.shape,
             uv: self.uv,
             medium: self.medium,
+            events: self.events,
         }
     }
 }
@@ -171,7 +185,8 @@ pub struct LightSet {
 /// Settings of light tracing.
 #[derive(Clone, Debug)]
 pub struct LightTraceSettings {
-    /// Most scattering events (medium and surface) on a light path; `u32::MAX` for no limit.
+    /// Most scattering events (medium and non-null surface) a light path may have before a
+    /// virtual light it records (`crate::depth::light_events`); the path ends past it.
     pub max_events: u32,
     /// Events after which Russian roulette on the relative throughput starts.
     pub rr_events: u32,
@@ -179,14 +194,12 @@ pub struct LightTraceSettings {
 
 impl LightTraceSettings {
     /// Limits that keep every camera connection within the scene's `max_depth` as `volpath`
-    /// counts it: a VRL connection adds two events (the VRL point and the camera point) and
-    /// volpath evaluates paths with at most `max_depth - 1` events.
+    /// counts it (`crate::depth`): a light after `e` events joined to a primary camera segment
+    /// makes a path of `e + 2` events, so `e <= max_depth - 3`; each connection checks its own
+    /// camera side. With `max_depth` 1 or 2 no light is usable: the paths record lights of no
+    /// events, which every connection refuses.
     pub fn from_max_depth(max_depth: i32) -> Self {
-        let max_events = if max_depth < 0 {
-            haze_scene::MAX_PATH_DEPTH
-        } else {
-            (max_depth as u32).min(haze_scene::MAX_PATH_DEPTH).saturating_sub(3)
-        };
+        let max_events = crate::depth::light_events(max_depth).unwrap_or(0);
         LightTraceSettings { max_events, rr_events: 8 }
     }
 }
@@ -300,6 +313,7 @@ fn trace_one(
                         ratio: Rgb::ZERO,
                         medium: m,
                         after_surface,
+                        events,
                     });
                 }
                 match h.sample_free_flight(ray.o, ray.d, t_surface, hero, s) {
@@ -333,6 +347,7 @@ fn trace_one(
                         ratio: r,
                         medium: m,
                         after_surface,
+                        events,
                     });
                 }
                 match ff {
@@ -370,6 +385,7 @@ fn trace_one(
                 shape: h.shape,
                 uv: h.uv,
                 medium,
+                events,
             });
         }
         let frame = haze_core::Frame::from_normal(h.ns);
@@ -381,9 +397,12 @@ fn trace_one(
         let d = frame.to_world(bs.wo);
         medium = shape.medium_towards(d, h.n, medium);
         after_surface = true;
-        events += 1;
-        if events >= settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
-            return;
+        // A thin sheet's straight transmission (`null` sample) is no event (crate::depth).
+        if !bs.null {
+            events += 1;
+            if events > settings.max_events || !survives_roulette(s, &mut t, r, events, settings) {
+                return;
+            }
         }
         ray = Ray::new(offset_origin(h.p, h.n, d), d);
     }
@@ -418,9 +437,10 @@ fn scatter(
         flux: at.power * *t / r.mean(),
         medium: at.m,
         after_surface: at.after_surface,
+        events: *events,
     });
     *events += 1;
-    if *events >= settings.max_events || !survives_roulette(s, t, r, *events, settings) {
+    if *events > settings.max_events || !survives_roulette(s, t, r, *events, settings) {
         return false;
     }
     let (d, _) = at.phase.sample(ray.d, s.next_2d());

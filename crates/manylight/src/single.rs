@@ -404,7 +404,7 @@ mod tests {
             Segment::new(near, across, 2.0),
         ];
         for seg in segments {
-            let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE };
+            let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE, events: 0 };
             let integrand = |u: f64, c: usize| {
                 let x = seg.at(u as f32);
                 let v = apex - x;

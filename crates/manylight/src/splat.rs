@@ -1,5 +1,5 @@
 //! Caustics seen directly, by light tracing to the camera: dedicated *caustic paths* from the
-//! point, spot and area emitters aimed at the scene's delta surfaces (glass, thin sheets),
+//! point, spot, area and directional emitters aimed at the scene's delta surfaces (glass, thin sheets),
 //! followed through delta chains, and connected to the pinhole from every point where they
 //! can scatter towards it: each medium segment after the first direction-changing delta
 //! vertex (single scattering, one point per segment) and the first non-delta surface point.
@@ -122,8 +122,9 @@ pub struct CausticTracer {
 const CAUSTIC_STREAM: u64 = 0x5b1a_7c0f_fee0_0001;
 
 impl CausticTracer {
-    /// `paths` caustic paths per pass, at most `max_events` delta vertices each; `None` if the
-    /// scene has no delta surface or no point, spot or area emitter (then there are no such
+    /// `paths` caustic paths per pass, at most `max_events` delta vertices (non-null samples)
+    /// each before their connection (`crate::depth`: `e + 1 <= max_depth - 1`); `None` if the
+    /// scene has no delta surface or no point, spot, area or directional emitter (then there are no such
     /// caustics), or if `paths` is 0.
     pub fn new(scene: &Scene, paths: u64, max_events: u32) -> Option<Self> {
         let targets: Vec<Target> = scene
@@ -162,7 +163,7 @@ impl CausticTracer {
             emitters: weights,
             cdf,
             paths,
-            max_events: max_events.max(1),
+            max_events,
             max_len: 4.0 * crate::lighttrace::scene_extent(scene),
         })
     }
@@ -194,6 +195,16 @@ impl CausticTracer {
         let i = self.cdf.partition_point(|&c| c < u).min(self.emitters.len() - 1);
         let (k, p_k) = self.emitters[i];
         let (u_pos, u_pick, u_dir) = (s.next_2d(), s.next_1d(), s.next_2d());
+        if let Emitter::Directional { d, irradiance } = &scene.emitters[k as usize] {
+            let (p, p_pos) = self.sample_sun_line(scene, *d, u_pick, u_dir)?;
+            return Some(EmissionSample {
+                p,
+                d: *d,
+                n: None,
+                weight: *irradiance / (p_k * p_pos),
+                emitter: k,
+            });
+        }
         let (p, n, p_pos) = match &scene.emitters[k as usize] {
             Emitter::Point { position, .. } => (*position, None, 1.0),
             Emitter::Spot { to_world, .. } => (to_world.transform_point3(Vec3::ZERO), None, 1.0),
@@ -226,6 +237,46 @@ impl CausticTracer {
             return None;
         }
         Some(EmissionSample { p, d, n, weight: le / (p_k * p_pos * pdf_dir), emitter: k })
+    }
+
+    /// A line of the sun's direction `d` aimed at the targets (the parallel-light form of the
+    /// cone mixture): target `j` with probability `pi r_j^2 / Σ pi r_k^2`, a uniform point of
+    /// the disk of radius `r_j` around `c_j` perpendicular to `d`; the line's density per unit
+    /// area of that plane is `n(line) / Σ pi r_k^2`, `n` the number of target disks it crosses.
+    /// Every line of direction `d` that meets a delta shape crosses its bounding sphere's disk,
+    /// so the estimate is unbiased. The origin is moved upstream to outside the scene's
+    /// bounding sphere, so whatever lies between the sun and the target shades the path.
+    /// Returns the origin and the density.
+    fn sample_sun_line(&self, scene: &Scene, d: Vec3, u_pick: f32, u: Vec2) -> Option<(Vec3, f32)> {
+        let total: f32 = self.targets.iter().map(|t| PI * t.r * t.r).sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        let mut pick = u_pick * total;
+        let mut chosen = self.targets[self.targets.len() - 1];
+        for t in &self.targets {
+            let area = PI * t.r * t.r;
+            if pick < area {
+                chosen = *t;
+                break;
+            }
+            pick -= area;
+        }
+        let frame = Frame::from_normal(d);
+        let q = haze_core::sampling::sample_uniform_disk_concentric(u);
+        let on_plane = chosen.c + chosen.r * frame.to_world(Vec3::new(q.x, q.y, 0.0));
+        let crossing = self
+            .targets
+            .iter()
+            .filter(|t| {
+                let v = on_plane - t.c;
+                (v - d * v.dot(d)).length_squared() <= t.r * t.r
+            })
+            .count()
+            .max(1);
+        let sphere = scene.bounding_sphere();
+        let back = (on_plane - sphere.center).length() + sphere.radius;
+        Some((on_plane - d * back, crossing as f32 / total))
     }
 
     /// A direction from `p` by the cone mixture, with its pdf `n(ω) / Σ Ω_j`.
@@ -326,6 +377,7 @@ impl CausticTracer {
                 if through_delta {
                     let frame = Frame::from_normal(h.ns);
                     let vpl = SurfaceVpl {
+                        events: 0,
                         p: h.p,
                         n: h.n,
                         frame,
@@ -341,15 +393,16 @@ impl CausticTracer {
                 }
                 return;
             }
-            events += 1;
-            if events > self.max_events {
-                return;
-            }
             let frame = Frame::from_normal(h.ns);
             let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
                 return;
             };
             through_delta |= !bs.null;
+            // A thin sheet's straight transmission (`null` sample) is no event.
+            events += !bs.null as u32;
+            if events > self.max_events {
+                return;
+            }
             // Adjoint transport, as in light tracing: the radiance-only 1/eta^2 is undone.
             beta *= bs.weight * (bs.eta * bs.eta);
             let d = frame.to_world(bs.wo);
@@ -386,7 +439,10 @@ fn bounding_sphere(g: &Geometry) -> Option<Target> {
 }
 
 /// A rough measure of the power emitter `e` (index `k`) sends towards the targets (for `P_k`),
-/// or `None` if it cannot start a caustic path (environments).
+/// or `None` if it starts no caustic path: environments (`constant`, `envmap`), whose caustics
+/// seen directly the camera path's continuation through the delta chain finds, since it can
+/// hit them (`gather.rs` leaves only area emitters to these paths); the sun cannot be hit, so
+/// its caustics come from here.
 fn emitter_weight(scene: &Scene, k: u32, e: &Emitter, targets: &[Target]) -> Option<f32> {
     let omega = |p: Vec3| -> f32 {
         targets
@@ -411,6 +467,9 @@ fn emitter_weight(scene: &Scene, k: u32, e: &Emitter, targets: &[Target]) -> Opt
             let area = scene.area_sampler(k)?.area;
             let c = bounding_sphere(&sh.geometry).map_or(Vec3::ZERO, |t| t.c);
             Some(radiance.mean() * area * omega(c) / PI)
+        }
+        Emitter::Directional { irradiance, .. } => {
+            Some(irradiance.mean() * targets.iter().map(|t| PI * t.r * t.r).sum::<f32>())
         }
         _ => None,
     }

@@ -218,6 +218,7 @@ impl SegCase {
         let frame = Frame::from_normal(n);
         let w_prev = Vec3::new(0.3, -0.2, 0.9).normalize();
         let vpl = SurfaceVpl {
+            events: 0,
             p,
             n,
             frame,
@@ -317,6 +318,7 @@ fn surface_vpls_to_surface_point_match_the_disk_form_factor() {
                 let (rad, ang) = (r * u.x.sqrt(), std::f32::consts::TAU * u.y);
                 let p = Vec3::new(rad * ang.cos(), rad * ang.sin(), 0.0);
                 let vpl = SurfaceVpl {
+                    events: 0,
                     p,
                     n: Vec3::Z,
                     frame,

@@ -21,6 +21,7 @@ fn random_vrls(s: &mut Sampler, n: usize, center: Vec3, extent: f32, max_len: f3
                 Rgb::new(1.0, 0.3 + s.next_1d(), 2.0 * s.next_1d())
             };
             Vrl {
+                events: 0,
                 seg: Segment::new(o, d, max_len * s.next_1d()),
                 flux: Rgb::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.01,
                 ratio,

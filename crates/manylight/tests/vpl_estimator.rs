@@ -55,7 +55,7 @@ impl Case {
         let cam_medium =
             VrlMedium { sigma_s, sigma_t: sigma_s + random_rgb(s, 0.0, 0.5), phase: phase_of(g_cam) };
         let d_in = haze_core::sampling::sample_uniform_sphere(s.next_2d());
-        let vpl = Vpl { p, d_in, flux: random_rgb(s, 0.5, 2.0), medium: 0 };
+        let vpl = Vpl { p, d_in, flux: random_rgb(s, 0.5, 2.0), medium: 0, events: 0 };
         let sigma_conn = random_rgb(s, 0.1, 1.0);
         Case {
             name: name.to_string(),
@@ -227,7 +227,7 @@ fn degenerate_configurations_give_finite_bounded_estimates() {
             phase: phase_of(gs[i as usize % 3]),
         };
         let vpl_phase = phase_of(gs[(i / 3) as usize % 3]);
-        let vpl = Vpl { p, d_in, flux: Rgb::ONE, medium: 0 };
+        let vpl = Vpl { p, d_in, flux: Rgb::ONE, medium: 0, events: 0 };
         let u = match i % 5 {
             0 => 0.0,
             1 => 1.0 - f32::EPSILON / 2.0,

@@ -271,7 +271,7 @@ fn degenerate_configurations_give_finite_bounded_estimates() {
             |g: f32| VrlMedium { sigma_s: Rgb::ONE, sigma_t: Rgb::new(0.0, 1.0, 10.0), phase: phase_of(g) };
         let (cm, vm) = (medium(gs[i as usize % 3]), medium(gs[(i / 3) as usize % 3]));
         let ratio = if i % 2 == 0 { Rgb::ZERO } else { Rgb::new(1.0, 1e-3, 20.0) };
-        let vrl = Vrl { seg: vrl_seg, flux: Rgb::ONE, ratio, medium: 0 };
+        let vrl = Vrl { seg: vrl_seg, flux: Rgb::ONE, ratio, medium: 0, events: 0 };
         let u = match i % 5 {
             0 => Vec2::ZERO,
             1 => Vec2::splat(1.0 - f32::EPSILON / 2.0),

@@ -50,7 +50,8 @@ pub(crate) fn caustic_tracer(
 ) -> Option<crate::splat::CausticTracer> {
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let paths = settings.caustic_paths.unwrap_or(pixels);
-    crate::splat::CausticTracer::new(scene, paths, settings.trace.max_events)
+    // A caustic path after `e` delta events joined to the pinhole has `e + 1` events.
+    crate::splat::CausticTracer::new(scene, paths, crate::depth::max_events(scene).saturating_sub(1))
 }
 
 /// Resolves the light budget to a number of paths per pass, and checks that every emitter can
@@ -141,6 +142,9 @@ pub(crate) fn surface_vpl_to_segment(
     key: u64,
     clamp: Option<f32>,
 ) -> haze_core::Rgb {
+    if !crate::depth::connects(scene, vpl.events, cs.events) {
+        return haze_core::Rgb::ZERO;
+    }
     if crate::hetero::any(scene) {
         let u = light_uniforms(key, SURFACE_VPL_STREAM | i as u32);
         return crate::hetero::surface_vpl_to_segment(scene, vpl, cs, cam_medium, u, clamp);
@@ -178,6 +182,9 @@ pub(crate) fn surface_vpl_to_point(
     gp: &crate::gather::GatherPoint,
     clamp: Option<f32>,
 ) -> haze_core::Rgb {
+    if !crate::depth::connects(scene, vpl.events, gp.events) {
+        return haze_core::Rgb::ZERO;
+    }
     let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
     crate::vpl::point_light_to_point(
         gp.p,
@@ -199,6 +206,9 @@ pub(crate) fn medium_vpl_to_point(
     media: &[VrlMedium],
     clamp: Option<f32>,
 ) -> haze_core::Rgb {
+    if !crate::depth::connects(scene, vpl.events, gp.events) {
+        return haze_core::Rgb::ZERO;
+    }
     let phase = &media[vpl.medium as usize].phase;
     crate::vpl::point_light_to_point(
         gp.p,

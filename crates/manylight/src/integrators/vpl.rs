@@ -114,6 +114,9 @@ impl Gather for VplGather<'_> {
             let mut sum = Rgb::ZERO;
             if pass.hetero {
                 for (i, vpl) in pass.groups[g].iter().enumerate() {
+                    if !crate::depth::connects(scene, vpl.events, cs.events) {
+                        continue;
+                    }
                     let u = light_uniforms(key, i as u32);
                     sum +=
                         crate::hetero::vpl_to_segment(scene, cs, &pass.media, vpl, u, self.integrator.clamp);
@@ -121,6 +124,9 @@ impl Gather for VplGather<'_> {
                 return sum;
             }
             for (i, vpl) in pass.groups[g].iter().enumerate() {
+                if !crate::depth::connects(scene, vpl.events, cs.events) {
+                    continue;
+                }
                 sum += sample_vpl_contribution(
                     &cs.seg,
                     cam_medium,

@@ -13,7 +13,7 @@ use crate::splat::{CameraSplats, CausticTracer};
 use crate::vpl::SurfaceVpl;
 use crate::vrl::estimator::{contributes, point_pair_estimate, sample_point_pair, PointPair};
 use crate::vrl::surface::sample_vrl_to_point;
-use crate::vrl::{Segment, Vrl, VrlMedium};
+use crate::vrl::{Vrl, VrlMedium};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
@@ -142,6 +142,9 @@ impl Gather for VrlGather<'_> {
             if pass.hetero {
                 let mut sum = Rgb::ZERO;
                 for (i, vrl) in pass.groups[g].iter().enumerate() {
+                    if !crate::depth::connects(scene, vrl.events, cs.events) {
+                        continue;
+                    }
                     sum += crate::hetero::vrl_to_segment(
                         scene,
                         cs,
@@ -152,7 +155,7 @@ impl Gather for VrlGather<'_> {
                 }
                 sum
             } else {
-                sum_contributions(scene, &cs.seg, cam_medium, &pass.groups[g], &pass.media, key)
+                sum_contributions(scene, cs, cam_medium, &pass.groups[g], &pass.media, key)
             }
         });
         let surface =
@@ -173,12 +176,12 @@ impl Gather for VrlGather<'_> {
         let mut sum = Rgb::ZERO;
         let lights = pass.groups.iter().flatten().enumerate();
         if pass.hetero {
-            for (i, vrl) in lights {
+            for (i, vrl) in lights.filter(|(_, v)| crate::depth::connects(scene, v.events, gp.events)) {
                 let u = light_uniforms(key, i as u32).x;
                 sum += crate::hetero::vrl_to_point(scene, gp.p, |d| gp.reflectance(d), &pass.media, vrl, u);
             }
         } else {
-            for (i, vrl) in lights {
+            for (i, vrl) in lights.filter(|(_, v)| crate::depth::connects(scene, v.events, gp.events)) {
                 sum += sample_vrl_to_point(
                     gp.p,
                     |d| gp.reflectance(d),
@@ -203,17 +206,20 @@ const CHUNK: usize = 16;
 /// every light of the chunk, then their contributions.
 fn sum_contributions(
     scene: &Scene,
-    cam: &Segment,
+    cs: &CameraSegment,
     cam_medium: &VrlMedium,
     lights: &[Vrl],
     media: &[VrlMedium],
     key: u64,
 ) -> Rgb {
+    let cam = &cs.seg;
     let mut sum = Rgb::ZERO;
     for (c, chunk) in lights.chunks(CHUNK).enumerate() {
         let mut pairs: [Option<PointPair>; CHUNK] = [None; CHUNK];
         for (k, vrl) in chunk.iter().enumerate() {
-            if contributes(cam, cam_medium, vrl, &media[vrl.medium as usize]) {
+            if crate::depth::connects(scene, vrl.events, cs.events)
+                && contributes(cam, cam_medium, vrl, &media[vrl.medium as usize])
+            {
                 pairs[k] = sample_point_pair(cam, &vrl.seg, light_uniforms(key, (c * CHUNK + k) as u32));
             }
         }

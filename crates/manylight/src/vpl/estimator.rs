@@ -32,6 +32,9 @@ pub struct Vpl {
     pub flux: Rgb,
     /// Index of the medium the vertex lies in (the caller's scene index).
     pub medium: u32,
+    /// Scattering events of the light path before this vertex (the path-length rule,
+    /// `crate::depth`).
+    pub events: u32,
 }
 
 /// One sample of the contribution of `vpl` to the camera segment `cam` (module docs): `u` picks

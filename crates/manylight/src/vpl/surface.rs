@@ -28,6 +28,9 @@ pub struct SurfaceVpl {
     pub uv: Vec2,
     /// The medium the light path arrived in.
     pub medium: Option<MediumId>,
+    /// Scattering events of the light path before this vertex (the path-length rule,
+    /// `crate::depth`).
+    pub events: u32,
 }
 
 impl SurfaceVpl {

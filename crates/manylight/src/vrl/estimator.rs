@@ -58,12 +58,15 @@ pub struct Vrl {
     pub ratio: Rgb,
     /// Index of the medium the segment lies in (the caller's scene index).
     pub medium: u32,
+    /// Scattering events of the light path before this segment (the path-length rule,
+    /// `crate::depth`).
+    pub events: u32,
 }
 
 impl Vrl {
     /// A VRL whose flux at the start is attenuated by `T_l(v)` (`ratio = 0`).
     pub const fn attenuated(seg: Segment, flux: Rgb, medium: u32) -> Self {
-        Vrl { seg, flux, ratio: Rgb::ZERO, medium }
+        Vrl { seg, flux, ratio: Rgb::ZERO, medium, events: 0 }
     }
 
     /// `Phi(v)`, the light arriving at distance `v` (type docs), in the VRL medium of

@@ -83,7 +83,7 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
         };
         let node = &nodes[index as usize];
         let seg = near_segment(&mut s, node, case, lo, hi);
-        let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE };
+        let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE, events: 0 };
         let ctx = lc.bound_context(&pass, &cs);
         let b = K::bound(&ctx, forest, index);
         let mut lights = Vec::new();

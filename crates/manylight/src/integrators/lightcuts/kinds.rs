@@ -90,6 +90,9 @@ impl ClusterKind for Vrls {
         key: u64,
         index: u32,
     ) -> Rgb {
+        if !crate::depth::connects(scene, vrl.events, cs.events) {
+            return Rgb::ZERO;
+        }
         if crate::hetero::any(scene) {
             return crate::hetero::vrl_to_segment(scene, cs, media, vrl, light_uniforms(key, index));
         }
@@ -103,6 +106,9 @@ impl ClusterKind for Vrls {
         )
     }
     fn to_point(scene: &Scene, gp: &GatherPoint, media: &[VrlMedium], vrl: &Vrl, u: f32) -> Rgb {
+        if !crate::depth::connects(scene, vrl.events, gp.events) {
+            return Rgb::ZERO;
+        }
         if crate::hetero::any(scene) {
             return crate::hetero::vrl_to_point(scene, gp.p, |d| gp.reflectance(d), media, vrl, u);
         }
@@ -141,6 +147,9 @@ impl ClusterKind for Vpls {
         key: u64,
         index: u32,
     ) -> Rgb {
+        if !crate::depth::connects(scene, vpl.events, cs.events) {
+            return Rgb::ZERO;
+        }
         if crate::hetero::any(scene) {
             return crate::hetero::vpl_to_segment(scene, cs, media, vpl, light_uniforms(key, index), None);
         }
