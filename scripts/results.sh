@@ -16,6 +16,11 @@
 #     PLUME_DENSITIES, every method
 #     against a volpath reference (volpath is the method to beat in heterogeneous media, and its
 #     reference has no many-light method's correlated noise);
+#   - sun and sky (SKY_*, issue 36): part sky, scenes/sun-shafts.xml (a directional sun through
+#     windows into haze, a constant sky; SKY_RES) against a REF_METHOD reference; part cloud,
+#     scenes/cloud.xml (a heterogeneous cumulus under sun and sky; CLOUD_RES) against a volpath
+#     reference, as the plume, brute force with 100 lights (a pass of 1000 takes longer than the
+#     budget);
 # scripts/aggregate-results.py turns the runs of one scene into one table: median RMSE over the
 # seeds with its min-max, and RMSE ratios computed per seed (same run, same machine load).
 # Methods: volpath; brute-force vrl at two light counts; the paper's deterministic cut
@@ -32,7 +37,8 @@
 #   REF_TIME=5 WIDE_REF_TIME=5 BUDGET=1 WIDE_BUDGET=1 SEEDS=0 scripts/results.sh   # a smoke test
 # With REUSE_REF=1 an existing $OUT/<scene>/reference.exr is kept (e.g. rendered earlier with
 # `nice`: a reference's quality does not depend on the load, an equal-time comparison's does).
-# PARTS selects parts: "bench validation wide whole plume" (default all five).
+# PARTS selects parts: "bench validation wide whole plume sky cloud" (default all seven). The document
+# holds only the parts run: for one part alone, give DOC another file and copy its section.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REF_TIME=${REF_TIME:-240}
@@ -44,7 +50,7 @@ SEEDS=${SEEDS:-"0 1 2"}
 REF_METHOD=${REF_METHOD:-vrl_lightcuts}
 OUT=${OUT:-target/results}
 SCENES=${SCENES:-"smoke-room spot-beam fog-shadow"}
-PARTS=${PARTS:-"bench validation wide whole plume"}
+PARTS=${PARTS:-"bench validation wide whole plume sky cloud"}
 WHOLE_REF_TIME=${WHOLE_REF_TIME:-300}
 WHOLE_BUDGET=${WHOLE_BUDGET:-20}
 PLUME_REF_TIME=${PLUME_REF_TIME:-240}
@@ -53,6 +59,10 @@ PLUME_RES=${PLUME_RES:-"64 80"}
 # Density scales of the plume (the scene's `density`, Mitsuba's `scale`): 8 is the dense smoke
 # of the demo; the thinner ones show where the many-light methods stand against volpath.
 PLUME_DENSITIES=${PLUME_DENSITIES:-"8 2 1"}
+SKY_REF_TIME=${SKY_REF_TIME:-240}
+SKY_BUDGET=${SKY_BUDGET:-15}
+SKY_RES=${SKY_RES:-"320 180"}
+CLOUD_RES=${CLOUD_RES:-"160 120"}
 # Two groups per run, separated by "--": one sample per pass, then each method's auto samples per
 # pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
@@ -60,6 +70,9 @@ METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:
 WIDE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000)
 WHOLE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vpl_lightcuts:10000)
 PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000
+  vpl_lightcuts:10000,light_samples=4)
+SKY_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000)
+CLOUD_METHODS=(volpath vrl:100 vpl:100 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000
   vpl_lightcuts:10000,light_samples=4)
 cargo build --release -p haze-cli >&2
 HAZE=${CARGO_TARGET_DIR:-target}/release/haze
@@ -204,7 +217,33 @@ for part in $PARTS; do
           "$density" "$pw" "$ph" "$PLUME_BUDGET" "$density" "$PLUME_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
       done
       ;;
-    *) echo "unknown part '$part' (bench, validation, wide, whole, plume)" >&2; exit 1 ;;
+    sky)
+      read -r sw sh <<< "$SKY_RES"
+      defines="-D res=$sw -D res_y=$sh"
+      ref=$OUT/sky/sun-shafts/reference.exr
+      reference scenes/sun-shafts.xml "$ref" "$SKY_REF_TIME" "$defines"
+      start_load=$(load)
+      table=$(compare "sky/sun-shafts" scenes/sun-shafts.xml "$ref" "$SKY_BUDGET" "$defines" "${SKY_METHODS[@]}")
+      printf '\n## sun-shafts (sun and sky through windows into haze), %sx%s, %s s per method\n\n`scenes/sun-shafts.xml`, `%s` reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
+        "$sw" "$sh" "$SKY_BUDGET" "$REF_METHOD" "$SKY_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      ;;
+    cloud)
+      read -r cw ch <<< "$CLOUD_RES"
+      defines="-D res=$cw -D res_y=$ch"
+      ref=$OUT/sky/cloud/reference.exr
+      if [ "${REUSE_REF:-0}" = 1 ] && [ -f "$ref" ]; then
+        echo "reusing $ref" >&2
+      else
+        mkdir -p "$(dirname "$ref")"
+        # shellcheck disable=SC2086
+        "$HAZE" reference scenes/cloud.xml $defines --time "$SKY_REF_TIME" --seed 1000003 -o "$ref" >&2
+      fi
+      start_load=$(load)
+      table=$(compare "sky/cloud" scenes/cloud.xml "$ref" "$SKY_BUDGET" "$defines" "${CLOUD_METHODS[@]}")
+      printf '\n## cloud (heterogeneous cumulus under sun and sky), %sx%s, %s s per method\n\n`scenes/cloud.xml`, volpath reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
+        "$cw" "$ch" "$SKY_BUDGET" "$SKY_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      ;;
+    *) echo "unknown part '$part' (bench, validation, wide, whole, plume, sky, cloud)" >&2; exit 1 ;;
   esac
 done
 
