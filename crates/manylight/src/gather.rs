@@ -239,6 +239,7 @@ fn walk(
         }
         let k = ((sampler.next_1d() * candidates as f32) as usize).min(candidates - 1);
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
+        let mut delta_lobe = false;
         if k < scattering {
             let c = *chain
                 .iter()
@@ -283,12 +284,20 @@ fn walk(
             let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return };
             st.beta *= bs.weight * candidates as f32;
             st.surface_seen = true;
+            if bs.specular {
+                // A delta lobe of a gathering BSDF (smooth `plastic`'s coat): no connection
+                // evaluates it (`eval` holds the other lobes only), so the chain after it
+                // gathers as after a delta surface, its area emitters included (caustic paths
+                // aim only at delta shapes).
+                delta_lobe = true;
+                st.skip_area_emitters = false;
+            }
             let d = frame.to_world(bs.wo);
             st.medium = scene.medium_towards(&h, d, st.medium);
             st.ray = Ray::new(offset_origin(h.p, h.n, d), d);
         }
         chain.clear();
-        st.gathering = false;
+        st.gathering = delta_lobe;
         if st.events > RR_EVENTS {
             let q = st.beta.max_component().min(0.95);
             if sampler.next_1d() >= q {

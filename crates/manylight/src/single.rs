@@ -166,7 +166,7 @@ fn from_infinity(
     }
     let x = cs.seg.at(u);
     let Some(es) = scene.sample_direction_of(i, 1.0, x, u_light, |_| true) else { return Rgb::ZERO };
-    if es.radiance.is_black() || !(es.pdf > 0.0) {
+    if es.radiance.is_black() || es.pdf.is_nan() || es.pdf <= 0.0 {
         return Rgb::ZERO;
     }
     let phase = med.phase.eval(-es.wi, -cs.seg.d);

@@ -358,7 +358,7 @@ impl Scene {
             }
             Emitter::EnvMap(map) => {
                 let s = map.sample(u_dir)?;
-                if !(s.pdf > 0.0) {
+                if s.pdf.is_nan() || s.pdf <= 0.0 {
                     return None;
                 }
                 (-s.d, s.radiance * (1.0 / s.pdf))
