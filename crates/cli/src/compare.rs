@@ -407,6 +407,7 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
         cut_image: None,
         quiet: false,
         inputs: &inputs,
+        note: None,
     };
     render_and_write(&args.scene, &scene, kind, &options, &outputs)
 }

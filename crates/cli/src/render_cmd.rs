@@ -148,9 +148,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let (scene, inputs) = crate::output::load_with_sources(&args.scene, &args.define)?;
     let (kind, options) = prepare(&scene, args.integrator.as_deref(), &args.options.pairs(), Spelling::Flag)
         .with_context(|| format!("{}", args.scene.display()))?;
-    if let Some(note) = replacement_note(&scene, args.integrator.as_deref()) {
-        eprintln!("{note}");
-    }
     if args.cut_image.is_some() && !kind.is_lightcuts() {
         return Err(not_applicable("--cut-image", kind, MethodKind::LIGHTCUTS));
     }
@@ -161,6 +158,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         cut_image: args.cut_image.as_deref(),
         quiet: args.quiet,
         inputs: &inputs,
+        note: replacement_note(&scene, args.integrator.as_deref()),
     };
     render_and_write(&args.scene, &scene, kind, &options, &outputs)
 }
@@ -174,6 +172,8 @@ pub struct Outputs<'a> {
     pub quiet: bool,
     /// Every file the scene reads (none of them may be overwritten).
     pub inputs: &'a [PathBuf],
+    /// A line for stderr once the render's inputs are checked (the scene's integrator replaced).
+    pub note: Option<String>,
 }
 
 /// Renders `scene` (read from `path`) with `kind` and `options` (Ctrl-C finishes the current
@@ -193,6 +193,9 @@ pub fn render_and_write(
         outputs.inputs,
     )?;
     crate::limits::check_render(options, scene)?;
+    if let Some(note) = &outputs.note {
+        eprintln!("{note}");
+    }
     if let Some(w) = scene.integrator.path_cap_warning() {
         eprintln!("warning: {w}");
     }
