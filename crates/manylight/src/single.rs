@@ -324,6 +324,24 @@ mod tests {
         (to_world, cutoff)
     }
 
+    /// Per channel, the mean of `n` one-sample estimates of [`single_scattering`] along `cs`
+    /// (sampler seeded with `seed`) and its standard error.
+    fn mean_and_error(scene: &Scene, cs: &CameraSegment, seed: u64, n: usize) -> [(f64, f64); 3] {
+        let mut sampler = Sampler::from_seed(seed);
+        let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
+        for _ in 0..n {
+            let v = single_scattering(scene, cs, &mut sampler);
+            for c in 0..3 {
+                sum[c] += v[c] as f64;
+                sum2[c] += (v[c] as f64).powi(2);
+            }
+        }
+        std::array::from_fn(|c| {
+            let mean = sum[c] / n as f64;
+            (mean, ((sum2[c] / n as f64 - mean * mean) / n as f64).sqrt())
+        })
+    }
+
     /// Every point of a random segment where the spot shines lies in the interval, and the
     /// interval is no longer than the lit part (up to the widening).
     #[test]
@@ -425,19 +443,9 @@ mod tests {
                     0.0
                 }
             });
-            let mut sampler = Sampler::from_seed(5);
-            let n = 40_000;
-            let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
-            for _ in 0..n {
-                let v = single_scattering(&scene, &cs, &mut sampler);
-                for c in 0..3 {
-                    sum[c] += v[c] as f64;
-                    sum2[c] += (v[c] as f64).powi(2);
-                }
-            }
+            let estimate = mean_and_error(&scene, &cs, 5, 40_000);
             for c in 0..3 {
-                let mean = sum[c] / n as f64;
-                let se = ((sum2[c] / n as f64 - mean * mean) / n as f64).sqrt();
+                let (mean, se) = estimate[c];
                 let z = (mean - exact[c]) / se.max(1e-12 * exact[c].abs()).max(1e-30);
                 assert!(z.abs() < 4.5, "{seg:?} channel {c}: {mean} vs {} (z {z:.2})", exact[c]);
                 assert!(exact[c] > 0.0, "{seg:?}: the segment should see the beam");
@@ -493,19 +501,9 @@ mod tests {
                 };
                 haze_testkit::quadrature::integrate(f, 0.0, seg.len as f64, &[], 1e-6)
             });
-            let mut sampler = Sampler::from_seed(8);
-            let n = 40_000;
-            let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
-            for _ in 0..n {
-                let v = single_scattering(&scene, &cs, &mut sampler);
-                for c in 0..3 {
-                    sum[c] += v[c] as f64;
-                    sum2[c] += (v[c] as f64).powi(2);
-                }
-            }
+            let estimate = mean_and_error(&scene, &cs, 8, 40_000);
             for c in 0..3 {
-                let mean = sum[c] / n as f64;
-                let se = ((sum2[c] / n as f64 - mean * mean) / n as f64).sqrt();
+                let (mean, se) = estimate[c];
                 let z = (mean - exact[c]) / se.max(1e-6 * exact[c].abs()).max(1e-30);
                 assert!(z.abs() < 4.5, "{seg:?} channel {c}: {mean} vs {} (z {z:.2})", exact[c]);
                 // The test has power: a 5% error would fail it.
