@@ -21,6 +21,9 @@
 #     scenes/cloud.xml (a heterogeneous cumulus under sun and sky; CLOUD_RES) against a volpath
 #     reference, as the plume, brute force with 100 lights (a pass of 1000 takes longer than the
 #     budget);
+#   - Mitsuba 3's media test scenes lit by an environment (PEERS_*, issue 36; part peers, needs the
+#     peer data, $HAZE_PEERS_DIR or ../shared/peers, skipped with a line without it) against their
+#     Mitsuba 3 references (about 32,000 spp), 48x48;
 # scripts/aggregate-results.py turns the runs of one scene into one table: median RMSE over the
 # seeds with its min-max, and RMSE ratios computed per seed (same run, same machine load).
 # Methods: volpath; brute-force vrl at two light counts; the paper's deterministic cut
@@ -37,7 +40,7 @@
 #   REF_TIME=5 WIDE_REF_TIME=5 BUDGET=1 WIDE_BUDGET=1 SEEDS=0 scripts/results.sh   # a smoke test
 # With REUSE_REF=1 an existing $OUT/<scene>/reference.exr is kept (e.g. rendered earlier with
 # `nice`: a reference's quality does not depend on the load, an equal-time comparison's does).
-# PARTS selects parts: "bench validation wide whole plume sky cloud" (default all seven). The document
+# PARTS selects parts: "bench validation wide whole plume sky cloud peers" (default all eight). The document
 # holds only the parts run: for one part alone, give DOC another file and copy its section.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -50,7 +53,7 @@ SEEDS=${SEEDS:-"0 1 2"}
 REF_METHOD=${REF_METHOD:-vrl_lightcuts}
 OUT=${OUT:-target/results}
 SCENES=${SCENES:-"smoke-room spot-beam fog-shadow"}
-PARTS=${PARTS:-"bench validation wide whole plume sky cloud"}
+PARTS=${PARTS:-"bench validation wide whole plume sky cloud peers"}
 WHOLE_REF_TIME=${WHOLE_REF_TIME:-300}
 WHOLE_BUDGET=${WHOLE_BUDGET:-20}
 PLUME_REF_TIME=${PLUME_REF_TIME:-240}
@@ -63,6 +66,13 @@ SKY_REF_TIME=${SKY_REF_TIME:-240}
 SKY_BUDGET=${SKY_BUDGET:-15}
 SKY_RES=${SKY_RES:-"320 180"}
 CLOUD_RES=${CLOUD_RES:-"160 120"}
+PEERS_BUDGET=${PEERS_BUDGET:-5}
+PEERS_DIR=${HAZE_PEERS_DIR:-../shared/peers}/mitsuba3-media-tests/tests/scenes/participating_media
+# The suite's scenes with a `constant` or `envmap` emitter (file stems).
+PEERS_SCENES=${PEERS_SCENES:-"test_homo_dielectric_envmap_volpath test_homo_null_envmap_volpath
+  test_homo_obj_inside_medium_volpath test_homo_spectral_sigmat_volpathmis test_homo_emitter_inside_medium_volpath
+  test_surf_area_light_volpath test_hetero_sigmat_volpath test_hetero_sigmat_albedo_volpath
+  test_hetero_spectral_sigmat_volpathmis"}
 # Two groups per run, separated by "--": one sample per pass, then each method's auto samples per
 # pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
@@ -72,6 +82,7 @@ WHOLE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vpl_lightcuts:10000)
 PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000
   vpl_lightcuts:10000,light_samples=4)
 SKY_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000)
+PEERS_METHODS=(volpath -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000)
 CLOUD_METHODS=(volpath vrl:100 vpl:100 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000
   vpl_lightcuts:10000,light_samples=4)
 cargo build --release -p haze-cli >&2
@@ -243,7 +254,20 @@ for part in $PARTS; do
       printf '\n## cloud (heterogeneous cumulus under sun and sky), %sx%s, %s s per method\n\n`scenes/cloud.xml`, volpath reference (%s s); load average %s at the start, %s at the end.\n\n%s\n' \
         "$cw" "$ch" "$SKY_BUDGET" "$SKY_REF_TIME" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
       ;;
-    *) echo "unknown part '$part' (bench, validation, wide, whole, plume, sky, cloud)" >&2; exit 1 ;;
+    peers)
+      if [ ! -d "$PEERS_DIR" ]; then
+        echo "part peers skipped: no peer data at $PEERS_DIR" >&2
+        continue
+      fi
+      for s in $PEERS_SCENES; do
+        stem=${s%_*}
+        start_load=$(load)
+        table=$(compare "peers/$stem" "$PEERS_DIR/$s.xml" "$PEERS_DIR/refs/${stem}_ref_rgb.exr" "$PEERS_BUDGET" "" "${PEERS_METHODS[@]}")
+        printf '\n## Mitsuba 3 %s (environment-lit, 48x48), %s s per method\n\nMitsuba 3 reference; load average %s at the start, %s at the end.\n\n%s\n' \
+          "$stem" "$PEERS_BUDGET" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
+      done
+      ;;
+    *) echo "unknown part '$part' (bench, validation, wide, whole, plume, sky, cloud, peers)" >&2; exit 1 ;;
   esac
 done
 
