@@ -261,20 +261,21 @@ pub fn paths_for_vrl_count(
 }
 
 /// The ray of an emission sample and the medium it starts in.
+///
+/// An area light's ray starts in the medium on its emitting side by the rule every walk uses
+/// leaving a surface point (`Scene::medium_leaving`, `docs/theory.md` §14): the media its shape
+/// declares, or those of every boundary touching the point; where neither declares any, the
+/// medium the point lies in.
 pub(crate) fn emission_ray(scene: &Scene, e: &EmissionSample) -> (Ray, Option<MediumId>) {
-    let medium = match e.n {
-        Some(n) => {
-            // Area light: the medium on the emitting side, if its shape declares one.
-            let shape = &scene.shapes[scene.emitters[e.emitter as usize].area_shape().unwrap_or(0) as usize];
-            if shape.is_medium_transition() {
-                shape.medium_towards(e.d, n, None)
-            } else {
-                scene.medium_at(offset_origin(e.p, n, e.d))
-            }
-        }
-        None => scene.medium_at(e.p),
-    };
-    (Ray::new(e.n.map_or(e.p, |n| offset_origin(e.p, n, e.d)), e.d), medium)
+    let Some(n) = e.n else { return (Ray::new(e.p, e.d), scene.medium_at(e.p)) };
+    let origin = offset_origin(e.p, n, e.d);
+    let shape = scene.emitters[e.emitter as usize]
+        .area_shape()
+        .expect("an emission sample with a normal is an area light's");
+    // A shape declaring media decides alone (or with what touches it): no need to look around.
+    let around =
+        if scene.shapes[shape as usize].is_medium_transition() { None } else { scene.medium_at(origin) };
+    (Ray::new(origin, e.d), scene.medium_leaving(shape, e.p, n, e.d, around))
 }
 
 fn trace_one(

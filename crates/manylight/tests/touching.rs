@@ -3,7 +3,8 @@
 //! boundary moved by 1 mm to either side (which are unambiguous, and agree with each other to
 //! far below the noise here). The scenes are in `tests/data/touching/`: a fog cube resting on a
 //! floor, a fog cube against a wall, a glass cube holding a medium whose null boundary is the
-//! glass's own surface, and a camera on the face of a fog cube.
+//! glass's own surface, a camera on the face of a fog cube, and an area light on a fog cube's
+//! face lighting the fog (whose light paths must start in the fog, `lighttrace::emission_ray`).
 //!
 //! Before the rule, a ray meeting the two surfaces at once got whichever the BVH returned: a
 //! null face that won led the path under the floor, behind the wall, or through the glass
@@ -198,4 +199,30 @@ fn camera_on_a_medium_boundary_renders_as_its_neighbours() {
         32,
         40,
     );
+}
+
+/// An area light flush against the fog's face, emitting into it: each many-light method agrees
+/// with volpath, and with both 1 mm neighbours (light paths start in the medium on the emitting
+/// side, `Scene::medium_leaving`; one starting in the vacuum below would leave the fog unlit by
+/// single scattering and the image far darker).
+#[test]
+fn area_light_on_a_medium_boundary_renders_as_its_neighbours() {
+    let scene = |y| load("emitter-on-fog-face.xml", ("y", y));
+    let flush = scene("0");
+    check(
+        "light on fog face",
+        &[("flush", scene("0"))],
+        &[("1 mm inside", scene("0.001")), ("1 mm below", scene("-0.001"))],
+        32,
+        40,
+    );
+    let reference = render_with(&flush, "volpath", 32, 40, 7);
+    let failures: Vec<String> = METHODS[1..]
+        .iter()
+        .filter_map(|m| {
+            let r = render_with(&flush, m, 32, 40, 8);
+            disagreement(&format!("light on fog face: {m} vs volpath"), &r, &reference)
+        })
+        .collect();
+    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
 }

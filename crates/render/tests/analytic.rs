@@ -250,3 +250,55 @@ fn thin_glass_does_not_count_towards_the_depth() {
         }
     }
 }
+
+/// An area light's emitting side is its triangles' side, whatever its vertex normals say: a
+/// quad facing the viewer (`-z`) whose interpolated normals lean away from the viewer emits
+/// `L` straight at a ray in vacuum, and in a scattering medium, where the light is reached by
+/// next-event estimation and by chance hits weighted against it, the estimate is the same, bit
+/// for bit, as without vertex normals. Mitsuba 3 decides the side by the interpolated normal
+/// (and converts its light samples' pdfs with it); that convention, and the small differences it
+/// makes on meshes with vertex normals, are in `docs/validation.md` (`homo_emitter_inside_medium`).
+#[test]
+fn area_light_emits_from_the_side_its_triangles_face() {
+    let radiance = Rgb::new(2.0, 1.0, 0.5);
+    let scene = |normals: Option<Vec<Vec3>>, medium: Option<Medium>| {
+        // Wound so that the geometric normal is -z.
+        let positions = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+        ];
+        let mesh = haze_scene::TriangleMesh::new(positions, normals, None, vec![[0, 1, 2], [0, 2, 3]], false);
+        let quad = Shape {
+            name: "light".into(),
+            geometry: Geometry::Mesh(mesh),
+            bsdf: Bsdf::Diffuse { reflectance: Rgb::ZERO.into() },
+            interior: None,
+            exterior: None,
+            emitter: Some(0),
+        };
+        let camera_medium = medium.as_ref().map(|_| 0);
+        Scene::new(
+            None,
+            camera(camera_medium),
+            1,
+            IntegratorSpec::default(),
+            vec![quad],
+            medium.into_iter().collect(),
+            vec![Emitter::Area { shape: 0, radiance }],
+        )
+    };
+    // 100 degrees from the geometric normal -z: facing away from a viewer on the -z side.
+    let leaning = Some(vec![Vec3::new(1.0, 0.0, 0.18).normalize(); 4]);
+    let ray = Ray::new(Vec3::new(0.1, 0.2, -3.0), Vec3::Z);
+
+    let (mean, _) = estimate(&volpath(), &scene(leaning.clone(), None), ray, None, 16, 1);
+    assert_eq!(mean.get(Component::Emitted), radiance, "seen directly in vacuum");
+
+    let fog = || Some(medium(Rgb::splat(0.5), Rgb::splat(0.9), Phase::Isotropic));
+    let (with_normals, _) = estimate(&volpath(), &scene(leaning, fog()), ray, Some(0), 4000, 2);
+    let (without, _) = estimate(&volpath(), &scene(None, fog()), ray, Some(0), 4000, 2);
+    assert!(!with_normals.get(Component::Single).is_black(), "the light reaches the medium");
+    assert_eq!(with_normals.0, without.0, "in a medium, with and without vertex normals");
+}
