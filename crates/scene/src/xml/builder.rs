@@ -14,7 +14,7 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
     let mut ids = Ids::new();
     collect_ids(&doc.root, &mut ids)?;
     let mut b = Builder::new(doc, &ids);
-    let mut camera: Option<(Camera, u32, &Element)> = None;
+    let mut camera: Option<(Camera, haze_core::SamplerSpec, &Element)> = None;
     let mut integrator: Option<(IntegratorSpec, &Element)> = None;
     for el in &doc.root.children {
         match el.tag.as_str() {
