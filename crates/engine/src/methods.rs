@@ -4,6 +4,7 @@
 pub use crate::options::MethodOptions;
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
+use haze_core::SamplerSpec;
 use haze_manylight::integrators::{
     CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator,
     Vrls,
@@ -11,7 +12,6 @@ use haze_manylight::integrators::{
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
 use haze_render::{Integrator, VolPath};
-use haze_core::SamplerSpec;
 use haze_scene::Scene;
 use std::sync::atomic::AtomicBool;
 

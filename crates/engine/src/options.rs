@@ -13,9 +13,9 @@
 //! method, never silently ignored.
 
 use anyhow::{anyhow, bail, Result};
+use haze_core::{SamplerKind, SamplerSpec};
 use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings};
 use haze_manylight::tree::bound::BoundKind;
-use haze_core::{SamplerKind, SamplerSpec};
 use haze_render::progressive::RenderSettings;
 use haze_scene::Scene;
 use std::fmt;
@@ -1107,6 +1107,41 @@ mod tests {
         // Explicit values are still checked.
         assert!(
             err(VrlLightcuts, &[("spp_per_pass", "0")], Spelling::Flag).contains("--spp-per-pass must be")
+        );
+    }
+
+    /// `--sampler` replaces the scene's sampler type for every method; the sample count is the
+    /// given spp or the scene's, rounded for the type (render and pass settings alike); an
+    /// unknown name lists the valid ones.
+    #[test]
+    fn sampler_overrides_the_scenes_and_rounds_the_spp() {
+        let small = scene(16, 16);
+        assert_eq!(small.sampler.kind, SamplerKind::Independent);
+        for m in MethodKind::ALL {
+            let o = ok(m, &[("sampler", "stratified"), ("spp", "10")]);
+            let r = o.render_settings(m, &small);
+            assert_eq!(
+                (r.sampler.kind, r.sampler.sample_count(), r.spp),
+                (SamplerKind::Stratified, 16, 16),
+                "{m}"
+            );
+            assert_eq!(o.pass_settings(m, &small).sampler, r.sampler);
+            assert_eq!(
+                o.describe(m).split(' ').find(|w| w.starts_with("sampler=")),
+                Some("sampler=stratified")
+            );
+            // Without spp: the scene's 4 rounded (ldsampler: 4, orthogonal: 4).
+            let o = ok(m, &[("sampler", "ldsampler")]);
+            assert_eq!(o.render_settings(m, &small).spp, 4);
+            // A time budget renders rounds of the scene's count.
+            let o = ok(m, &[("sampler", "multijitter"), ("time", "1")]);
+            assert_eq!((o.render_settings(m, &small).spp, o.sampler_for(&small).sample_count()), (0, 4));
+            assert_eq!(Options::defaults().render_settings(m, &small).sampler, SamplerSpec::independent(4));
+        }
+        let e = err(VolPath, &[("sampler", "sobol")], Spelling::Flag);
+        assert!(
+            e.contains("--sampler must be 'independent', 'stratified', 'multijitter', 'orthogonal' or 'ldsampler', got 'sobol'"),
+            "{e}"
         );
     }
 

@@ -49,18 +49,25 @@ fn images_do_not_depend_on_threads_or_pass_grouping() {
 /// channel-pixel with 3x3-pooled sample variances. Stratified samples are not independent, so
 /// their sample variance overstates the variance of their mean: the test is conservative for
 /// the generators, not for the control.
-fn against_independent(scene: &Scene, sampler: SamplerSpec, spp: u32, reference: &(Vec<f32>, Vec<f32>)) -> ZTestReport {
+fn against_independent(
+    scene: &Scene,
+    sampler: SamplerSpec,
+    spp: u32,
+    reference: &(Vec<f32>, Vec<f32>),
+) -> ZTestReport {
     let out = render_volpath(scene, &settings(sampler, spp, 11, 16));
     assert_eq!(out.invalid_samples, 0);
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
-    let var: Vec<f32> = pool_variance(&out.film.sample_variance(None), w, h, 3).iter().map(|v| v / spp as f32).collect();
+    let var: Vec<f32> =
+        pool_variance(&out.film.sample_variance(None), w, h, 3).iter().map(|v| v / spp as f32).collect();
     z_test(&out.film.mean(None), &var, &reference.0, &reference.1, 0.01)
 }
 
 fn independent_reference(scene: &Scene, spp: u32) -> (Vec<f32>, Vec<f32>) {
     let out = render_volpath(scene, &settings(SamplerSpec::independent(spp), spp, 1, 16));
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
-    let var = pool_variance(&out.film.sample_variance(None), w, h, 3).iter().map(|v| v / spp as f32).collect();
+    let var =
+        pool_variance(&out.film.sample_variance(None), w, h, 3).iter().map(|v| v / spp as f32).collect();
     (out.film.mean(None), var)
 }
 

@@ -400,7 +400,10 @@ fn samplers_load_with_mitsuba_names_defaults_and_rounding() {
     use haze_core::SamplerKind;
     let sampler = |body: &str| load(&format!(r#"<sensor type="perspective">{body}</sensor>"#));
     let s = sampler(r#"<sampler type="stratified"><integer name="sample_count" value="10"/></sampler>"#);
-    assert_eq!((s.sampler.kind, s.spp, s.sampler.sample_count(), s.sampler.jitter), (SamplerKind::Stratified, 16, 16, true));
+    assert_eq!(
+        (s.sampler.kind, s.spp, s.sampler.sample_count(), s.sampler.jitter),
+        (SamplerKind::Stratified, 16, 16, true)
+    );
     let s = sampler(
         r#"<sampler type="multijitter"><integer name="sample_count" value="10"/><boolean name="jitter" value="false"/></sampler>"#,
     );
@@ -417,14 +420,20 @@ fn samplers_load_with_mitsuba_names_defaults_and_rounding() {
     let s = load(SENSOR);
     assert_eq!((s.sampler.kind, s.spp), (SamplerKind::Independent, 4));
 
-    let e = error(r#"<sensor type="perspective"><sampler type="orthogonal"><integer name="strength" value="3"/></sampler></sensor>"#);
+    let e = error(
+        r#"<sensor type="perspective"><sampler type="orthogonal"><integer name="strength" value="3"/></sampler></sensor>"#,
+    );
     assert!(e.message.contains("orthogonal 'strength' 3 is not supported"), "{e}");
     // Mitsuba 3's ldsampler has no jitter (Mitsuba 3 reports it unreferenced too).
-    let e = error(r#"<sensor type="perspective"><sampler type="ldsampler"><boolean name="jitter" value="false"/></sampler></sensor>"#);
+    let e = error(
+        r#"<sensor type="perspective"><sampler type="ldsampler"><boolean name="jitter" value="false"/></sampler></sensor>"#,
+    );
     assert!(e.message.contains("jitter"), "{e}");
     // Mitsuba 3.9 has no `sobol` sampler.
     let e = error(r#"<sensor type="perspective"><sampler type="sobol"/></sensor>"#);
     assert!(e.message.contains("sobol"), "{e}");
-    let e = error(r#"<sensor type="perspective"><sampler type="stratified"><integer name="sample_count" value="-4"/></sampler></sensor>"#);
+    let e = error(
+        r#"<sensor type="perspective"><sampler type="stratified"><integer name="sample_count" value="-4"/></sampler></sensor>"#,
+    );
     assert!(e.message.contains("'sample_count' must be > 0"), "{e}");
 }

@@ -52,7 +52,8 @@ impl SamplerKind {
         SamplerKind::LdSampler,
     ];
     /// Their names, as `<sampler type="...">` and `--sampler` spell them.
-    pub const NAMES: [&'static str; 5] = ["independent", "stratified", "multijitter", "orthogonal", "ldsampler"];
+    pub const NAMES: [&'static str; 5] =
+        ["independent", "stratified", "multijitter", "orthogonal", "ldsampler"];
 
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]

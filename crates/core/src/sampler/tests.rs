@@ -7,7 +7,13 @@ use crate::Sampler;
 use haze_testkit::chi2::chi2_test;
 
 /// Samples `0..count` of pixel `pixel`, each `draws` values: `draw(sampler)` per dimension.
-fn samples<T>(spec: &SamplerSpec, pixel: u64, first: u64, count: u64, mut draw: impl FnMut(&mut Sampler) -> T) -> Vec<T> {
+fn samples<T>(
+    spec: &SamplerSpec,
+    pixel: u64,
+    first: u64,
+    count: u64,
+    mut draw: impl FnMut(&mut Sampler) -> T,
+) -> Vec<T> {
     let mut s = Sampler::for_pixel(spec, 9, pixel, 0);
     (first..first + count)
         .map(|i| {
@@ -81,10 +87,21 @@ fn stratified_puts_one_sample_per_stratum() {
                 let pts = samples(&spec, pixel, first, n as u64, |s| {
                     (s.next_2d(), s.next_1d(), s.next_2d(), s.next_1d())
                 });
-                for (what, v) in [("dim 0", pts.iter().map(|p| p.0).collect::<Vec<_>>()), ("dim 2", pts.iter().map(|p| p.2).collect())] {
-                    one_per_cell(&v, r * r, |p| interval(p.x, r) + r * interval(p.y, r), &format!("n {n} {what}"));
+                for (what, v) in [
+                    ("dim 0", pts.iter().map(|p| p.0).collect::<Vec<_>>()),
+                    ("dim 2", pts.iter().map(|p| p.2).collect()),
+                ] {
+                    one_per_cell(
+                        &v,
+                        r * r,
+                        |p| interval(p.x, r) + r * interval(p.y, r),
+                        &format!("n {n} {what}"),
+                    );
                 }
-                for (what, v) in [("dim 1", pts.iter().map(|p| p.1).collect::<Vec<_>>()), ("dim 3", pts.iter().map(|p| p.3).collect())] {
+                for (what, v) in [
+                    ("dim 1", pts.iter().map(|p| p.1).collect::<Vec<_>>()),
+                    ("dim 3", pts.iter().map(|p| p.3).collect()),
+                ] {
                     one_per_cell(&v, n, |x| interval(x, n), &format!("n {n} {what}"));
                 }
             }
@@ -102,7 +119,10 @@ fn multijitter_is_a_grid_and_n_rooks() {
             let pts = samples(&spec, 42, first, n as u64, |s| (s.next_1d(), s.next_2d(), s.next_2d()));
             let one_d: Vec<f32> = pts.iter().map(|p| p.0).collect();
             one_per_cell(&one_d, n, |x| interval(x, n), &format!("n {n} 1D"));
-            for (what, v) in [("dim 1", pts.iter().map(|p| p.1).collect::<Vec<_>>()), ("dim 2", pts.iter().map(|p| p.2).collect())] {
+            for (what, v) in [
+                ("dim 1", pts.iter().map(|p| p.1).collect::<Vec<_>>()),
+                ("dim 2", pts.iter().map(|p| p.2).collect()),
+            ] {
                 let what = format!("n {n} {what}");
                 one_per_cell(&v, rx * ry, |p| interval(p.x, rx) + rx * interval(p.y, ry), &what);
                 one_per_cell(&v, n, |p| interval(p.x, n), &format!("{what} x"));
@@ -120,13 +140,19 @@ fn orthogonal_stratifies_every_pair_of_its_p_plus_1_dimensions() {
         assert_eq!(spec.sample_count(), n);
         for first in [0, n as u64] {
             let dims = (p + 1) as usize;
-            let pts = samples(&spec, 5, first, n as u64, |s| (0..dims).map(|_| s.next_1d()).collect::<Vec<f32>>());
+            let pts =
+                samples(&spec, 5, first, n as u64, |s| (0..dims).map(|_| s.next_1d()).collect::<Vec<f32>>());
             for j in 0..dims {
                 let col: Vec<f32> = pts.iter().map(|v| v[j]).collect();
                 one_per_cell(&col, n, |x| interval(x, n), &format!("p {p} dim {j}"));
                 for k in j + 1..dims {
                     let pair: Vec<(f32, f32)> = pts.iter().map(|v| (v[j], v[k])).collect();
-                    one_per_cell(&pair, n, |(a, b)| interval(a, p) + p * interval(b, p), &format!("p {p} dims {j}, {k}"));
+                    one_per_cell(
+                        &pair,
+                        n,
+                        |(a, b)| interval(a, p) + p * interval(b, p),
+                        &format!("p {p} dims {j}, {k}"),
+                    );
                 }
             }
         }
@@ -147,7 +173,12 @@ fn assert_02_net(pts: &[(f32, f32)], what: &str) {
     assert_eq!(1 << m, pts.len());
     for k in 0..=m {
         let (nx, ny) = (1u32 << k, 1u32 << (m - k));
-        one_per_cell(pts, 1 << m, |(x, y)| interval(x, nx) + nx * interval(y, ny), &format!("{what}, {nx} x {ny}"));
+        one_per_cell(
+            pts,
+            1 << m,
+            |(x, y)| interval(x, nx) + nx * interval(y, ny),
+            &format!("{what}, {nx} x {ny}"),
+        );
     }
 }
 
@@ -165,7 +196,10 @@ fn ldsampler_rounds_are_02_nets() {
                 let block = &pts[lo as usize..hi as usize];
                 let what = format!("n {n} pixel {pixel} samples {lo}..{hi}");
                 assert_02_net(&block.iter().map(|p| p.1).collect::<Vec<_>>(), &format!("{what} dim 0"));
-                assert_02_net(&block.iter().map(|p| (p.2.x, p.2.y)).collect::<Vec<_>>(), &format!("{what} dim 2"));
+                assert_02_net(
+                    &block.iter().map(|p| (p.2.x, p.2.y)).collect::<Vec<_>>(),
+                    &format!("{what} dim 2"),
+                );
                 let one_d: Vec<f32> = block.iter().map(|p| p.0).collect();
                 one_per_cell(&one_d, hi - lo, |x| interval(x, hi - lo), &format!("{what} dim 1"));
             }
@@ -224,6 +258,8 @@ fn a_sample_depends_only_on_its_index() {
             b.start_sample(i);
             assert_eq!((a.next_2d(), a.next_1d()), (b.next_2d(), b.next_1d()), "{kind} sample {i}");
         }
-        assert!(in_order.iter().all(|(u, x)| (0.0..1.0).contains(&u.x) && (0.0..1.0).contains(&u.y) && (0.0..1.0).contains(x)));
+        assert!(in_order
+            .iter()
+            .all(|(u, x)| (0.0..1.0).contains(&u.x) && (0.0..1.0).contains(&u.y) && (0.0..1.0).contains(x)));
     }
 }
