@@ -166,7 +166,7 @@ impl Pattern {
     }
 
     /// Dimension `j` of the pattern index's row of the Bose orthogonal array OA(p^2, p + 1, p, 2)
-    /// (Jarosz et al. 2019, "Orthogonal array sampling for Monte Carlo rendering", §4; Mitsuba 3's
+    /// (Jarosz et al. 2019, "Orthogonal array sampling for Monte Carlo rendering", section 4; Mitsuba 3's
     /// `orthogonal` with strength 2): row `i = (a0, a1)` in base p; column 0 is `a0`, column 1
     /// `a1`, column `j >= 2` is `a0 + (j - 1) a1 mod p`. Any two of the first `p + 1` columns
     /// take every pair of values once, so every 2D projection of those dimensions has one sample
