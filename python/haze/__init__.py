@@ -110,6 +110,7 @@ class Scene:
         max_cut: int | None = None,
         bound: str | None = None,
         builder: str | None = None,
+        sampler: str | None = None,
     ) -> Film:
         """Like :meth:`render`, but returns the :class:`Film` (means, variances, raw sums)."""
         return self._inner.render(integrator, **_given(locals()))
@@ -135,6 +136,7 @@ class Scene:
         max_cut: int | None = None,
         bound: str | None = None,
         builder: str | None = None,
+        sampler: str | None = None,
     ):
         # The docstring is made from the engine's table below (_RENDER_DOC).
         film = self._inner.render(integrator, **_given(locals()))
@@ -161,6 +163,7 @@ class Scene:
         max_cut: int | None = None,
         bound: str | None = None,
         builder: str | None = None,
+        sampler: str | None = None,
     ) -> Film:
         """Renders the passes ``first .. first + count`` and returns their :class:`Film`.
 
@@ -187,6 +190,7 @@ class Scene:
         max_cut: int | None = None,
         bound: str | None = None,
         builder: str | None = None,
+        sampler: str | None = None,
     ) -> np.ndarray:
         """Per pixel, a float32 array of shape (H, W), what ``haze render --cut-image`` draws:
         the mean cut size (``cut="bound"``) or the largest cut node's share of the stochastic

@@ -152,6 +152,7 @@ def render(
     max_cut: int | None = None,
     bound: str | None = None,
     builder: str | None = None,
+    sampler: str | None = None,
     defaults: dict | None = None,
     address: str | None = None,
     passes_per_task: int | None = None,
@@ -181,7 +182,7 @@ def render(
         scene_path: the scene file on the driver; it and every file it reads are shipped to
             the workers through the object store.
         integrator, spp, time, seed, spp_per_pass, components, vrls, light_paths, caustic_paths, vpl_clamp,
-            clamp, cut, cut_size, light_samples, epsilon, max_cut, bound, builder: as in :meth:`haze.Scene.render` (the engine's
+            clamp, cut, cut_size, light_samples, epsilon, max_cut, bound, builder, sampler: as in :meth:`haze.Scene.render` (the engine's
             options, :data:`haze.OPTIONS`).
         defaults: ``<default>`` overrides of the scene (``-D name=value``).
         address: Ray cluster address (``"auto"`` for a running cluster); used only if Ray is

@@ -197,6 +197,7 @@ pub fn run_method(
             spp_per_pass,
             components: false,
             first_pass: passes,
+            sampler: spec.options.sampler_for(scene, None),
         };
         let out = method.render(scene, &settings, &cancel, |_| {});
         if out.passes == 0 {

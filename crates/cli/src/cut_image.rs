@@ -12,6 +12,7 @@
 
 use anyhow::{Context, Result};
 use haze_engine::methods::Method;
+use haze_engine::options::Options;
 use haze_manylight::integrators::CutStrategy;
 use haze_scene::Scene;
 use std::path::Path;
@@ -36,8 +37,9 @@ pub fn legend_height(height: usize) -> usize {
 /// Renders one extra pass at 1 spp (pass 0, the same seed: the lights and cuts of the image's
 /// first pass) with `method`'s lightcuts integrator, recording the mean cut size per camera
 /// segment of each pixel, and writes the heat map to `path`.
-pub fn write(method: &Method, scene: &Scene, seed: u64, max_cut: u32, path: &Path) -> Result<()> {
-    let sizes = method.cut_sizes(scene, seed)?;
+pub fn write(method: &Method, scene: &Scene, options: &Options, path: &Path) -> Result<()> {
+    let sizes = method.cut_sizes(scene, options.seed, options.sampler_for(scene))?;
+    let max_cut = options.method.lightcuts.cut.max_cut;
     let stochastic = method.cut_strategy() == Some(CutStrategy::Stochastic);
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     let scale = if stochastic { 1.0 } else { max_cut.max(1) as f32 };

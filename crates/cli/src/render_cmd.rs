@@ -236,8 +236,7 @@ pub fn render_and_write(
     }
     report_and_write(outputs, &plan, options.components, path, scene, kind.name(), &output)?;
     if let Some(path) = outputs.cut_image {
-        let max_cut = options.method.lightcuts.cut.max_cut;
-        crate::cut_image::write(&method, scene, options.seed, max_cut, path)?;
+        crate::cut_image::write(&method, scene, options, path)?;
     }
     Ok(())
 }

@@ -15,6 +15,7 @@ pub mod frame;
 pub mod phase;
 pub mod ray;
 pub mod rng;
+pub mod sampler;
 pub mod sampling;
 pub mod spectrum;
 pub mod transmittance;
@@ -24,6 +25,7 @@ pub use glam::{Mat4, Vec2, Vec3};
 pub use phase::Phase;
 pub use ray::Ray;
 pub use rng::Sampler;
+pub use sampler::{SamplerKind, SamplerSpec};
 pub use spectrum::Rgb;
 
 /// Relative offset used to move ray origins off a surface (scaled by the magnitude of the point).

@@ -2,15 +2,22 @@
 //!
 //! Every random decision in haze draws from a [`Sampler`] whose stream is a pure function of
 //! `(seed, pixel, pass)` (or `(seed, light path, pass)` for light tracing), never of the thread
-//! that runs it: the same seed gives a bit-identical image whatever the thread count.
+//! that runs it: the same seed gives a bit-identical image whatever the thread count. A pixel's
+//! sampler may follow one of Mitsuba 3's sample patterns ([`crate::sampler`]), then its values
+//! depend also on the sample's index within the pixel ([`Sampler::start_sample`]).
 
+use crate::sampler::pattern::Pattern;
+use crate::sampler::SamplerSpec;
 use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg32;
 
-/// Independent uniform sampler (Mitsuba's `independent`), a PCG32 stream.
+/// Uniform numbers for one pixel's samples (or one light path): Mitsuba's `independent`, a
+/// PCG32 stream, unless made by [`Sampler::for_pixel`] with a pattern, whose `next_1d` and
+/// `next_2d` then take each dimension from it (`next_u32` always from the stream).
 #[derive(Clone, Debug)]
 pub struct Sampler {
     rng: Pcg32,
+    pattern: Option<Pattern>,
 }
 
 /// SplitMix64 finaliser: decorrelates nearby integer keys before they seed a PCG stream.
@@ -25,30 +32,70 @@ impl Sampler {
     pub fn new(seed: u64, key_a: u64, key_b: u64) -> Self {
         let state = mix64(seed ^ mix64(key_a.wrapping_add(0x9e37_79b9_7f4a_7c15)));
         let stream = mix64(key_b ^ mix64(seed.wrapping_add(0x632b_e59b_d9b4_e019)));
-        Sampler { rng: Pcg32::new(state, stream | 1) }
+        Sampler { rng: Pcg32::new(state, stream | 1), pattern: None }
+    }
+
+    /// The sampler of pixel `pixel` in pass `pass` of a render seeded `seed` with generator
+    /// `spec`: the stream of [`Sampler::new`]`(seed, pixel, pass)` (so `independent` gives the
+    /// same numbers), and `spec`'s pattern keyed by `(seed, pixel)`, at sample 0 until
+    /// [`Sampler::start_sample`] says which sample comes.
+    pub fn for_pixel(spec: &SamplerSpec, seed: u64, pixel: u64, pass: u64) -> Self {
+        let mut s = Sampler::new(seed, pixel, pass);
+        s.pattern = Pattern::new(spec, seed, pixel);
+        s
     }
 
     /// From a single 64-bit seed (tests and tools).
     pub fn from_seed(seed: u64) -> Self {
-        Sampler { rng: Pcg32::seed_from_u64(seed) }
+        Sampler { rng: Pcg32::seed_from_u64(seed), pattern: None }
+    }
+
+    /// The next values are those of the pixel's sample `index` (its index within the pixel
+    /// over all passes), from its first dimension. No effect on an independent sampler.
+    #[inline]
+    pub fn start_sample(&mut self, index: u64) {
+        if let Some(p) = &mut self.pattern {
+            p.start_sample(index);
+        }
     }
 
     /// Uniform in `[0, 1)`, 24 bits of precision so that the result is never 1.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        (self.rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        match &mut self.pattern {
+            None => uniform(&mut self.rng),
+            Some(p) => {
+                let rng = &mut self.rng;
+                p.next_1d(&mut || uniform(rng))
+            }
+        }
     }
 
     #[inline]
     pub fn next_2d(&mut self) -> glam::Vec2 {
-        let a = self.next_1d();
-        glam::Vec2::new(a, self.next_1d())
+        match &mut self.pattern {
+            None => {
+                let a = uniform(&mut self.rng);
+                glam::Vec2::new(a, uniform(&mut self.rng))
+            }
+            Some(p) => {
+                let rng = &mut self.rng;
+                let (x, y) = p.next_2d(&mut || uniform(rng));
+                glam::Vec2::new(x, y)
+            }
+        }
     }
 
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         self.rng.next_u32()
     }
+}
+
+/// Uniform in `[0, 1)` from the top 24 bits of the stream's next number.
+#[inline]
+fn uniform(rng: &mut Pcg32) -> f32 {
+    (rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 #[cfg(test)]

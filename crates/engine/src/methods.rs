@@ -4,6 +4,7 @@
 pub use crate::options::MethodOptions;
 use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
+use haze_core::SamplerSpec;
 use haze_manylight::integrators::{
     CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator,
     Vrls,
@@ -148,9 +149,10 @@ impl Method {
     /// Per pixel (row-major, 0 where the camera path meets no medium), from one extra 1-spp
     /// pass (pass 0 with `seed`: the lights and cuts of the image's first pass), the mean over
     /// the pixel's camera segments of the cut size (`--cut bound`) or of the largest cut node's
-    /// share of the cut's importance (`--cut stochastic`). Lightcut methods only.
-    pub fn cut_sizes(&self, scene: &Scene, seed: u64) -> Result<Vec<f32>> {
-        let settings = RenderSettings { spp: 1, seed, ..Default::default() };
+    /// share of the cut's importance (`--cut stochastic`), with the image's sample generator
+    /// `sampler` (its first sample). Lightcut methods only.
+    pub fn cut_sizes(&self, scene: &Scene, seed: u64, sampler: SamplerSpec) -> Result<Vec<f32>> {
+        let settings = RenderSettings { spp: 1, seed, sampler, ..Default::default() };
         let cancel = AtomicBool::new(false);
         let out = match self {
             Method::VrlLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),

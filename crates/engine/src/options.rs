@@ -13,6 +13,7 @@
 //! method, never silently ignored.
 
 use anyhow::{anyhow, bail, Result};
+use haze_core::{SamplerKind, SamplerSpec};
 use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings};
 use haze_manylight::tree::bound::BoundKind;
 use haze_render::progressive::RenderSettings;
@@ -633,6 +634,23 @@ pub const OPTIONS: &[OptionSpec] = &[
             )
         },
     },
+    OptionSpec {
+        name: "sampler",
+        kind: Kind::Choice(&SamplerKind::NAMES),
+        default: Default::Unset("the scene's <sampler> type"),
+        help: "Sample generator (Mitsuba 3's samplers), replacing the type of the scene's \
+               <sampler>; the sample count is still --spp or the scene's sample_count, rounded \
+               as Mitsuba 3 rounds it for the generator (stratified: up to a square; \
+               multijitter: to ceil(n / floor(sqrt n)) * floor(sqrt n); orthogonal: to the \
+               square of a prime; ldsampler: to a square power of two).",
+        applies_to: ALL,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "ldsampler",
+        set: |o, v| o.method.sampler = SamplerKind::from_name(v.word()),
+        get: |o| o.method.sampler.map(|k| k.name().to_string()),
+    },
 ];
 
 /// The option called `name` (snake_case).
@@ -652,6 +670,22 @@ pub struct MethodOptions {
     pub lightcuts: LightcutSettings,
     /// Caustic paths per pass (`None`: one per pixel; 0: the camera continuation instead).
     pub caustic_paths: Option<u64>,
+    /// The sample generator's type (`None`: the scene's `<sampler>`'s).
+    pub sampler: Option<SamplerKind>,
+}
+
+impl MethodOptions {
+    /// The sample generator of a render of `scene`: the scene's `<sampler>`, of type
+    /// [`MethodOptions::sampler`] when given (with that type's default parameters if it
+    /// differs), for `spp` samples (default: the scene's) rounded as Mitsuba 3 rounds them for
+    /// the type. A time-budget render repeats rounds of this many samples.
+    pub fn sampler_for(&self, scene: &Scene, spp: Option<u32>) -> SamplerSpec {
+        let spec = match self.sampler {
+            Some(kind) => scene.sampler.with_kind(kind),
+            None => scene.sampler,
+        };
+        spec.with_sample_count(spp.unwrap_or(scene.spp))
+    }
 }
 
 /// What every pass of a range shares (`crate::passes`).
@@ -662,6 +696,8 @@ pub struct PassSettings {
     pub spp_per_pass: u32,
     /// Keep the component split (emitted, single, multiple, surface).
     pub components: bool,
+    /// The sample generator ([`Options::sampler_for`]).
+    pub sampler: SamplerSpec,
 }
 
 /// Every setting of a render, as resolved from the table.
@@ -720,6 +756,7 @@ impl Options {
                 clamp: None,
                 lightcuts: LightcutSettings::default(),
                 caustic_paths: None,
+                sampler: None,
             },
         };
         for spec in OPTIONS {
@@ -741,22 +778,30 @@ impl Options {
             return n;
         }
         let auto = auto_spp_per_pass(method, scene.camera.width, scene.camera.height);
-        match (self.time, self.spp.unwrap_or(scene.spp)) {
+        match (self.time, self.sampler_for(scene).sample_count()) {
             (None, spp) if spp > 0 => (1..=auto).rev().find(|d| spp % d == 0).unwrap_or(1),
             _ => auto,
         }
     }
 
-    /// The progressive render's settings for `method`: `spp` samples (default: the scene's) or
-    /// `time` seconds, in passes of [`Options::spp_per_pass_for`] samples.
+    /// The sample generator of a render of `scene` ([`MethodOptions::sampler_for`] with `spp`).
+    pub fn sampler_for(&self, scene: &Scene) -> SamplerSpec {
+        self.method.sampler_for(scene, self.spp)
+    }
+
+    /// The progressive render's settings for `method`: `spp` samples (default: the scene's;
+    /// rounded for the sampler, [`Options::sampler_for`]) or `time` seconds, in passes of
+    /// [`Options::spp_per_pass_for`] samples.
     pub fn render_settings(&self, method: MethodKind, scene: &Scene) -> RenderSettings {
+        let sampler = self.sampler_for(scene);
         RenderSettings {
-            spp: if self.time.is_some() { 0 } else { self.spp.unwrap_or(scene.spp) },
+            spp: if self.time.is_some() { 0 } else { sampler.sample_count() },
             time_limit: self.time.map(std::time::Duration::from_secs_f64),
             seed: self.seed,
             spp_per_pass: self.spp_per_pass_for(method, scene),
             components: self.components,
             first_pass: 0,
+            sampler,
         }
     }
 
@@ -766,6 +811,7 @@ impl Options {
             seed: self.seed,
             spp_per_pass: self.spp_per_pass_for(method, scene),
             components: self.components,
+            sampler: self.sampler_for(scene),
         }
     }
 
@@ -1061,6 +1107,41 @@ mod tests {
         // Explicit values are still checked.
         assert!(
             err(VrlLightcuts, &[("spp_per_pass", "0")], Spelling::Flag).contains("--spp-per-pass must be")
+        );
+    }
+
+    /// `--sampler` replaces the scene's sampler type for every method; the sample count is the
+    /// given spp or the scene's, rounded for the type (render and pass settings alike); an
+    /// unknown name lists the valid ones.
+    #[test]
+    fn sampler_overrides_the_scenes_and_rounds_the_spp() {
+        let small = scene(16, 16);
+        assert_eq!(small.sampler.kind, SamplerKind::Independent);
+        for m in MethodKind::ALL {
+            let o = ok(m, &[("sampler", "stratified"), ("spp", "10")]);
+            let r = o.render_settings(m, &small);
+            assert_eq!(
+                (r.sampler.kind, r.sampler.sample_count(), r.spp),
+                (SamplerKind::Stratified, 16, 16),
+                "{m}"
+            );
+            assert_eq!(o.pass_settings(m, &small).sampler, r.sampler);
+            assert_eq!(
+                o.describe(m).split(' ').find(|w| w.starts_with("sampler=")),
+                Some("sampler=stratified")
+            );
+            // Without spp: the scene's 4 rounded (ldsampler: 4, orthogonal: 4).
+            let o = ok(m, &[("sampler", "ldsampler")]);
+            assert_eq!(o.render_settings(m, &small).spp, 4);
+            // A time budget renders rounds of the scene's count.
+            let o = ok(m, &[("sampler", "multijitter"), ("time", "1")]);
+            assert_eq!((o.render_settings(m, &small).spp, o.sampler_for(&small).sample_count()), (0, 4));
+            assert_eq!(Options::defaults().render_settings(m, &small).sampler, SamplerSpec::independent(4));
+        }
+        let e = err(VolPath, &[("sampler", "sobol")], Spelling::Flag);
+        assert!(
+            e.contains("--sampler must be 'independent', 'stratified', 'multijitter', 'orthogonal' or 'ldsampler', got 'sobol'"),
+            "{e}"
         );
     }
 

@@ -94,6 +94,7 @@ pub fn render_passes(
             spp_per_pass: settings.spp_per_pass,
             components: settings.components,
             first_pass: lo,
+            sampler: settings.sampler,
         };
         let out = method.render(scene, &one, cancel, |_| {});
         if out.interrupted || out.passes != 1 {

@@ -74,6 +74,7 @@ fn main() {
             components: false,
             time_limit: None,
             first_pass: 0,
+            sampler: Default::default(),
         };
         set_selection_probe(every);
         render(&scene, &integrator, &settings, &AtomicBool::new(false), |_| {});

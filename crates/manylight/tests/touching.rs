@@ -57,6 +57,7 @@ fn render_passes<I: Integrator>(
             components: false,
             time_limit: None,
             first_pass: k,
+            sampler: Default::default(),
         };
         let out = render(scene, integrator, &settings, &AtomicBool::new(false), |_| {});
         assert_eq!(out.invalid_samples, 0);

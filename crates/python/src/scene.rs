@@ -185,7 +185,7 @@ impl Scene {
         let scene = self.inner.clone();
         let sizes = interrupt::run(py, move |_| -> anyhow::Result<_> {
             let (_, m, options) = method(&scene, integrator.as_deref(), &given)?;
-            m.cut_sizes(&scene, options.seed)
+            m.cut_sizes(&scene, options.seed, options.sampler_for(&scene))
         })?
         .map_err(value_error)?;
         let (w, h) = (self.inner.camera.width as usize, self.inner.camera.height as usize);

@@ -1,9 +1,11 @@
 //! The progressive render loop: passes of a few samples per pixel, run until a sample count or a
 //! time budget is reached or the user interrupts.
 //!
-//! Reproducibility: the sampler of pixel `i` in pass `k` is `Sampler::new(seed, i, k)`, and each
-//! pixel is accumulated by exactly one task in a fixed order, so the same seed and settings give
-//! a bit-identical image for any thread count.
+//! Reproducibility: the sampler of pixel `i` in pass `k` is `Sampler::for_pixel(generator, seed,
+//! i, k)` (for `independent`, `Sampler::new(seed, i, k)`), its `j`-th sample of the pass is the
+//! pixel's sample `k * spp_per_pass + j` of the generator's pattern, and each pixel is
+//! accumulated by exactly one task in a fixed order, so the same seed and settings give a
+//! bit-identical image for any thread count.
 //!
 //! Passes run in rounds: one parallel sweep over the film renders several consecutive passes
 //! (every pixel its samples of pass `k`, then of `k + 1`, ...), so the accumulation order of each
@@ -15,7 +17,7 @@
 use crate::components::{Component, PathRadiance};
 use crate::film::Film;
 use crate::integrators::{Integrator, VolPath};
-use haze_core::Sampler;
+use haze_core::{Sampler, SamplerSpec};
 use haze_scene::Scene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -35,6 +37,9 @@ pub struct RenderSettings {
     /// Index of the first pass. Passes are independent and keyed by their index, so renders of
     /// disjoint pass ranges (other processes, other machines) merge exactly with `Film::merge`.
     pub first_pass: u32,
+    /// The sample generator; its `sample_count` is the size of its pattern (a time-budget
+    /// render, or spp beyond it, starts fresh rounds of the pattern).
+    pub sampler: SamplerSpec,
 }
 
 impl Default for RenderSettings {
@@ -46,6 +51,7 @@ impl Default for RenderSettings {
             spp_per_pass: 1,
             components: false,
             first_pass: 0,
+            sampler: SamplerSpec::default(),
         }
     }
 }
@@ -157,8 +163,11 @@ pub fn render<I: Integrator>(
             for (x, slot) in row.chunks_mut(stride).enumerate() {
                 let pixel = (y * w + x) as u64;
                 for (k, (&n_this, data)) in counts.iter().zip(&data).enumerate() {
-                    let mut sampler = Sampler::new(settings.seed, pixel, (first + k as u32) as u64);
-                    for _ in 0..n_this {
+                    let pass = (first + k as u32) as u64;
+                    let mut sampler = Sampler::for_pixel(&settings.sampler, settings.seed, pixel, pass);
+                    for j in 0..n_this {
+                        // Every pass but the last holds spp_per_pass samples.
+                        sampler.start_sample(pass * spp_per_pass as u64 + j);
                         // The reconstruction filter by importance sampling (see `PixelFilter`).
                         let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
                         let ray = rays.generate(pos);

@@ -81,6 +81,9 @@ pub struct Scene {
     pub camera: Camera,
     /// Samples per pixel from the sampler's `sample_count` (Mitsuba default 4).
     pub spp: u32,
+    /// The sensor's `<sampler>` (`independent` unless the loader sets another; a render rounds
+    /// its spp for the generator, `SamplerSpec::with_sample_count`).
+    pub sampler: haze_core::SamplerSpec,
     pub integrator: IntegratorSpec,
     pub shapes: Vec<Shape>,
     pub media: Vec<Medium>,
@@ -195,6 +198,7 @@ impl Scene {
             path,
             camera,
             spp,
+            sampler: haze_core::SamplerSpec::independent(spp),
             integrator,
             shapes,
             media,

@@ -392,3 +392,48 @@ fn pplastic_reads_mitsuba_parameters() {
     .expect_err("an error");
     assert!(e.message.contains("either 'eta' or 'int_ior'"), "{e}");
 }
+
+/// Mitsuba 3's samplers: their types, parameters and defaults, and the sample counts rounded as
+/// Mitsuba 3.9.1 rounds them (and renders them).
+#[test]
+fn samplers_load_with_mitsuba_names_defaults_and_rounding() {
+    use haze_core::SamplerKind;
+    let sampler = |body: &str| load(&format!(r#"<sensor type="perspective">{body}</sensor>"#));
+    let s = sampler(r#"<sampler type="stratified"><integer name="sample_count" value="10"/></sampler>"#);
+    assert_eq!(
+        (s.sampler.kind, s.spp, s.sampler.sample_count(), s.sampler.jitter),
+        (SamplerKind::Stratified, 16, 16, true)
+    );
+    let s = sampler(
+        r#"<sampler type="multijitter"><integer name="sample_count" value="10"/><boolean name="jitter" value="false"/></sampler>"#,
+    );
+    assert_eq!((s.sampler.kind, s.spp, s.sampler.jitter), (SamplerKind::Multijitter, 12, false));
+    let s = sampler(
+        r#"<sampler type="orthogonal"><integer name="sample_count" value="30"/><integer name="strength" value="2"/><integer name="seed" value="3"/></sampler>"#,
+    );
+    assert_eq!((s.sampler.kind, s.spp), (SamplerKind::Orthogonal, 49));
+    let s = sampler(r#"<sampler type="ldsampler"/>"#);
+    assert_eq!((s.sampler.kind, s.spp), (SamplerKind::LdSampler, 4));
+    let s = sampler(r#"<sampler type="ldsampler"><integer name="sample_count" value="17"/></sampler>"#);
+    assert_eq!(s.spp, 64);
+    // No sampler: independent, 4 samples.
+    let s = load(SENSOR);
+    assert_eq!((s.sampler.kind, s.spp), (SamplerKind::Independent, 4));
+
+    let e = error(
+        r#"<sensor type="perspective"><sampler type="orthogonal"><integer name="strength" value="3"/></sampler></sensor>"#,
+    );
+    assert!(e.message.contains("orthogonal 'strength' 3 is not supported"), "{e}");
+    // Mitsuba 3's ldsampler has no jitter (Mitsuba 3 reports it unreferenced too).
+    let e = error(
+        r#"<sensor type="perspective"><sampler type="ldsampler"><boolean name="jitter" value="false"/></sampler></sensor>"#,
+    );
+    assert!(e.message.contains("jitter"), "{e}");
+    // Mitsuba 3.9 has no `sobol` sampler.
+    let e = error(r#"<sensor type="perspective"><sampler type="sobol"/></sensor>"#);
+    assert!(e.message.contains("sobol"), "{e}");
+    let e = error(
+        r#"<sensor type="perspective"><sampler type="stratified"><integer name="sample_count" value="-4"/></sampler></sensor>"#,
+    );
+    assert!(e.message.contains("'sample_count' must be > 0"), "{e}");
+}

@@ -14,7 +14,7 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
     let mut ids = Ids::new();
     collect_ids(&doc.root, &mut ids)?;
     let mut b = Builder::new(doc, &ids);
-    let mut camera: Option<(Camera, u32, &Element)> = None;
+    let mut camera: Option<(Camera, haze_core::SamplerSpec, &Element)> = None;
     let mut integrator: Option<(IntegratorSpec, &Element)> = None;
     for el in &doc.root.children {
         match el.tag.as_str() {
@@ -25,8 +25,8 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
                         first.line
                     )));
                 }
-                let (cam, spp) = sensor::build(&mut b, el)?;
-                camera = Some((cam, spp, el));
+                let (cam, sampler) = sensor::build(&mut b, el)?;
+                camera = Some((cam, sampler, el));
             }
             "integrator" => {
                 if let Some((_, first)) = integrator {
@@ -92,11 +92,15 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             tag => return Err(el.error(format!("unknown element <{tag}>"))),
         }
     }
-    let Some((camera, spp, _)) = camera else {
+    let Some((camera, sampler, _)) = camera else {
         return Err(doc.root.error("the scene has no <sensor> (haze needs a perspective sensor)"));
     };
     let integrator = integrator.map(|(i, _)| i).unwrap_or_default();
-    Ok(Scene::new(Some(file.to_path_buf()), camera, spp, integrator, b.shapes, b.media, b.emitters))
+    let spp = sampler.sample_count();
+    let mut scene =
+        Scene::new(Some(file.to_path_buf()), camera, spp, integrator, b.shapes, b.media, b.emitters);
+    scene.sampler = sampler;
+    Ok(scene)
 }
 
 /// Every plugin element with an `id`, anywhere in the tree (Mitsuba 3 lets a `<ref>` name any

@@ -1,5 +1,6 @@
 //! `<sensor type="perspective">` with its `<film type="hdrfilm">` (and `<rfilter>`),
-//! `<sampler type="independent">` and optional medium.
+//! `<sampler>` (Mitsuba 3's `independent`, `stratified`, `multijitter`, `orthogonal`, `ldsampler`)
+//! and optional medium.
 
 use super::context::Builder;
 use super::document::Element;
@@ -9,30 +10,30 @@ use super::values::parse_float;
 use super::LoadError;
 use crate::camera::{Camera, PixelFilter};
 use glam::Mat4;
+use haze_core::{SamplerKind, SamplerSpec};
 
 /// Mitsuba 3's `hdrfilm` default resolution.
 const DEFAULT_WIDTH: u32 = 768;
 const DEFAULT_HEIGHT: u32 = 576;
-/// Mitsuba 3's default `sample_count` of the `independent` sampler.
-const DEFAULT_SPP: u32 = 4;
 /// Larger films are surely a typo (and would exhaust memory).
 const MAX_RESOLUTION: i32 = 1 << 16;
 
-/// The camera and the sample count of `<sensor>` element `el`.
+/// The camera and the sampler of `<sensor>` element `el` (no `<sampler>`: `independent` with
+/// Mitsuba 3's 4 samples).
 ///
 /// `perspective` parameters (Mitsuba 3 defaults): `fov` in degrees with `fov_axis` (`x`), or
 /// `focal_length` (`"50mm"`, on a 36x24 mm film, measured along the diagonal) when no `fov`
 /// is given; `near_clip` (0.01), `far_clip` (10000), `focus_distance` (`far_clip`; no effect on
 /// a pinhole), `to_world` (identity; no scaling).
-pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera, u32), LoadError> {
+pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera, SamplerSpec), LoadError> {
     let p = b.params(el)?;
     let (width, height, filter) = match single(&p, "film")? {
         Some(film_el) => film(&p.nested(film_el)?)?,
         None => (DEFAULT_WIDTH, DEFAULT_HEIGHT, PixelFilter::MITSUBA_DEFAULT),
     };
-    let spp = match single(&p, "sampler")? {
+    let sampler = match single(&p, "sampler")? {
         Some(sampler_el) => sampler(&p.nested(sampler_el)?)?,
-        None => DEFAULT_SPP,
+        None => SamplerSpec::default(),
     };
     let medium = match single(&p, "medium")? {
         Some(medium_el) => Some(b.medium(medium_el)?),
@@ -65,7 +66,7 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera,
     }
     p.finish()?;
     let camera = Camera { to_world, fov_x_deg, near_clip, far_clip, medium, width, height, filter };
-    Ok((camera, spp))
+    Ok((camera, sampler))
 }
 
 /// The one nested object of `tag`, if any.
@@ -214,15 +215,35 @@ fn rfilter(p: &Params) -> Result<PixelFilter, LoadError> {
     Ok(filter)
 }
 
-/// `independent`: `sample_count` (4); `seed` is accepted and ignored (haze seeds per pixel).
-fn sampler(p: &Params) -> Result<u32, LoadError> {
-    let spp = p.int("sample_count", DEFAULT_SPP as i32)?;
+/// Every sampler: `sample_count` (4, > 0; rounded as Mitsuba 3 rounds it for the type, e.g. up to
+/// a square for `stratified`, and rendered so), `seed` (accepted and ignored: haze seeds per
+/// pixel from the render's seed); `stratified`, `multijitter` and `orthogonal` also `jitter`
+/// (true), `orthogonal` `strength` (2; the only strength haze renders).
+fn sampler(p: &Params) -> Result<SamplerSpec, LoadError> {
+    let kind = SamplerKind::from_name(p.ty())
+        .ok_or_else(|| p.element().error(format!("unsupported sampler type '{}'", p.ty())))?;
+    let spp = p.int("sample_count", haze_core::sampler::DEFAULT_SAMPLE_COUNT as i32)?;
     if spp <= 0 {
         return Err(p.error_at("sample_count", format!("'sample_count' must be > 0, got {spp}")));
     }
     p.int("seed", 0)?;
+    let mut spec = SamplerSpec::new(kind, spp as u32);
+    if matches!(kind, SamplerKind::Stratified | SamplerKind::Multijitter | SamplerKind::Orthogonal) {
+        spec.jitter = p.bool("jitter", true)?;
+    }
+    if kind == SamplerKind::Orthogonal {
+        // Mitsuba 3 builds strength-t arrays by Bush's construction but still draws p^2 of their
+        // p^t rows, which are not stratified in any projection; its docs advise against it.
+        let strength = p.int("strength", 2)?;
+        if strength != 2 {
+            return Err(p.error_at(
+                "strength",
+                format!("orthogonal 'strength' {strength} is not supported (haze renders strength 2)"),
+            ));
+        }
+    }
     p.finish()?;
-    Ok(spp as u32)
+    Ok(spec)
 }
 
 #[cfg(test)]
