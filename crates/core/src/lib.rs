@@ -12,6 +12,7 @@
 pub mod color;
 pub mod fastmath;
 pub mod frame;
+pub mod hash;
 pub mod phase;
 pub mod ray;
 pub mod rng;

@@ -20,12 +20,7 @@ pub struct Sampler {
     pattern: Option<Pattern>,
 }
 
-/// SplitMix64 finaliser: decorrelates nearby integer keys before they seed a PCG stream.
-pub fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
+pub use crate::hash::mix64;
 
 impl Sampler {
     /// A stream determined by `seed` and two integer keys (e.g. pixel index and pass index).

@@ -48,7 +48,7 @@ impl Pattern {
         if spec.kind == SamplerKind::Independent {
             return None;
         }
-        let pixel_seed = crate::rng::mix64(seed ^ crate::rng::mix64(pixel ^ 0x5851_f42d_4c95_7f2d));
+        let pixel_seed = crate::hash::mix64(seed ^ crate::hash::mix64(pixel ^ 0x5851_f42d_4c95_7f2d));
         let mut p = Pattern {
             kind: spec.kind,
             jitter: spec.jitter,

@@ -50,7 +50,7 @@ pub fn permute(index: u32, n: u32, seed: u32) -> u32 {
 /// neighbouring pixels, dimensions and rounds before they seed permutations and scrambles).
 #[inline]
 pub fn hash2(a: u64, b: u64) -> u32 {
-    (crate::rng::mix64(a ^ crate::rng::mix64(b.wrapping_add(0x9e37_79b9_7f4a_7c15))) >> 32) as u32
+    (crate::hash::mix64(a ^ crate::hash::mix64(b.wrapping_add(0x9e37_79b9_7f4a_7c15))) >> 32) as u32
 }
 
 #[cfg(test)]
