@@ -225,6 +225,7 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
                             budget: LightBudget::Paths(paths),
                             trace: trace.clone(),
                             caustic_paths: None,
+                            compensated_clamp: None,
                         };
                         let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, lc, 0)?;
                         let settings = RenderSettings { spp: 1, ..Default::default() };
@@ -258,6 +259,7 @@ fn bench_lightcuts(args: &BenchArgs, options: &Options, scenes: &[PathBuf]) -> R
             budget: LightBudget::Vrls(vrls),
             trace: trace.clone(),
             caustic_paths: None,
+            compensated_clamp: None,
         };
         let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(100_000), LightcutSettings::default(), 0)?;
         let lc_secs = frame_seconds(&scene, &lc);
@@ -300,8 +302,12 @@ fn cut_growth() -> Result<()> {
         let mut row = String::new();
         let mut lights = 0.0;
         for bound in [BoundKind::Paper, BoundKind::Tight] {
-            let ml =
-                ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone(), caustic_paths: None };
+            let ml = ManyLightSettings {
+                budget: LightBudget::Vrls(n),
+                trace: trace.clone(),
+                caustic_paths: None,
+                compensated_clamp: None,
+            };
             let lc = LightcutSettings {
                 bound,
                 cut: CutSettings { max_cut: u32::MAX, ..Default::default() },
@@ -345,6 +351,7 @@ fn bench_vrl(options: &Options, scenes: &[PathBuf]) -> Result<()> {
             budget: options.method.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
             caustic_paths: None,
+            compensated_clamp: None,
         };
         let integrator = VrlIntegrator::new(&scene, ml, 0)?;
         let t0 = Instant::now();
@@ -438,8 +445,12 @@ fn bench_stochastic(args: &BenchArgs, scenes: &[PathBuf]) -> Result<()> {
         let mut prepared = Vec::new();
         let mut n = 10_000u64;
         while n <= args.max_vrls {
-            let ml =
-                ManyLightSettings { budget: LightBudget::Vrls(n), trace: trace.clone(), caustic_paths: None };
+            let ml = ManyLightSettings {
+                budget: LightBudget::Vrls(n),
+                trace: trace.clone(),
+                caustic_paths: None,
+                compensated_clamp: None,
+            };
             let integ = LightcutsIntegrator::<Vrls>::new(&scene, ml, options.method.lightcuts, 0)?;
             let data = integ.begin_pass(&scene, 0, 0);
             prepared.push((integ, data));

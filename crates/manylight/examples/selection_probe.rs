@@ -64,6 +64,7 @@ fn main() {
             budget: LightBudget::Vrls(vrls),
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
             caustic_paths: None,
+            compensated_clamp: None,
         };
         let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, settings, 0)
             .unwrap_or_else(|e| fail(&format!("{path}: {e}")));

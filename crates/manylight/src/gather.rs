@@ -63,6 +63,9 @@ pub(crate) trait Gather {
     fn split(&self) -> Option<f32> {
         Some(1.0)
     }
+    /// `Some(c)`: `point` clamps the `1/d^2` of its surface VPLs at `c`, and the walk recovers
+    /// the clamped part (`Walk::compensate_from`).
+    fn compensated_clamp(&self) -> Option<f32>;
 }
 
 thread_local! {
@@ -109,6 +112,17 @@ struct Walk {
     /// The primary chain splits at its first delta vertex with two lobes (`ChainEnd::Split`),
     /// with this factor on the lobe probabilities (1; `Gather::split`).
     may_split: Option<f32>,
+    /// The gathering point this chain continues from by a non-delta BSDF sample, while only
+    /// null boundaries and thin sheets' straight crossings lie behind: the surface VPL
+    /// connections to it were clamped (`Gather::compensated_clamp`), and the chain's surface
+    /// vertex `y` gathers again, as a gathering point, weighted by the part clamped off,
+    /// `(1 - c |y - x|^2)+`. Kollig & Keller (2004, "Illumination in the presence of weak
+    /// singularities", §3): the surface VPLs at distance `d` estimate
+    /// `∫ L(y -> x) f_x cos_x dω` with `dω = cos_y dA / d^2`; clamping `1/d^2` at `c` leaves
+    /// `∫ L(y -> x) f_x cos_x (1 - c d^2)+ dω`, which a BSDF-sampled direction from `x`, the
+    /// radiance leaving `y` estimated by a camera walk from `y`, estimates without the VPLs'
+    /// singularity.
+    compensate_from: Option<Vec3>,
 }
 
 /// How a chain ended.
@@ -145,6 +159,7 @@ pub(crate) fn whole_path_radiance(
         direct: true,
         skip_area_emitters: false,
         may_split: gather.split(),
+        compensate_from: None,
     };
     CHAIN.with_borrow_mut(|chain| {
         chain.clear();
@@ -209,8 +224,17 @@ fn walk(
         }
         let hit = match end {
             ChainEnd::Surface(h) if st.gathering => Some(h),
+            ChainEnd::Surface(h) => match (st.compensate_from, gather.compensated_clamp()) {
+                (Some(x), Some(c)) => {
+                    let w = 1.0 - c * (h.p - x).length_squared();
+                    st.beta *= w.max(0.0);
+                    (w > 0.0).then_some(h)
+                }
+                _ => None,
+            },
             _ => None,
         };
+        st.compensate_from = None;
         let mut frame_wi = None;
         if let Some(h) = &hit {
             let shape = &scene.shapes[h.shape as usize];
@@ -284,6 +308,7 @@ fn walk(
             let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return };
             st.beta *= bs.weight * candidates as f32;
             st.surface_seen = true;
+            st.compensate_from = (!bs.specular).then_some(h.p);
             if bs.specular {
                 // A delta lobe of a gathering BSDF (smooth `plastic`'s coat): no connection
                 // evaluates it (`eval` holds the other lobes only), so the chain after it
@@ -322,6 +347,7 @@ fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample
         surface_seen: true,
         gathering: st.gathering || !bs.null,
         direct: st.direct && bs.null,
+        compensate_from: st.compensate_from.filter(|_| bs.null),
         ..*st
     }
 }

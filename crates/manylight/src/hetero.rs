@@ -31,7 +31,8 @@ use crate::vrl::{Segment, Vrl, VrlMedium};
 use glam::{Vec2, Vec3};
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
-use haze_scene::hetero::{Heterogeneous, MajorantDistance};
+use haze_scene::hetero::Heterogeneous;
+use haze_scene::marched::MarchedDistance;
 use haze_scene::{MediumId, Scene};
 
 /// True if any medium of the scene is heterogeneous.
@@ -94,7 +95,7 @@ pub(crate) fn connect(scene: &Scene, from: MediumId, y: Vec3, x: Vec3, s: &mut S
 }
 
 /// The share of the geometric strategy (`1/h`, equiangular) in the one-sample mixture with the
-/// majorant's distance (T34) on a heterogeneous segment.
+/// marched density (T34) on a heterogeneous segment.
 const GEOMETRIC_SHARE: f64 = 0.5;
 
 /// The bound cut's factor of medium `id` (`m` its entry of the pass's media table), per channel:
@@ -112,21 +113,21 @@ pub(crate) fn bound_factor(scene: &Scene, m: &VrlMedium, id: MediumId) -> Rgb {
     }
 }
 
-/// The majorant's distance distribution along `seg` in `h`, if it has one.
+/// The marched density (T34) along `seg` in `h`, if it has one.
 #[inline]
-fn majorant_distance<'a>(h: Option<&'a Heterogeneous>, seg: &Segment) -> Option<MajorantDistance<'a>> {
-    h.and_then(|h| MajorantDistance::new(&h.majorants, seg.o, seg.d, seg.len))
+fn majorant_distance(h: Option<&Heterogeneous>, seg: &Segment) -> Option<MarchedDistance> {
+    h.and_then(|h| MarchedDistance::new(h, seg.o, seg.d, seg.len))
 }
 
 /// A distance `t` on `seg` towards the point `p` and `1 / (w^2 p(t))` (`w = |seg(t) - p|`),
 /// times `min(1, c w^2)` under the clamp `c`: equiangular sampling (T8), (T9), or with the
-/// majorant's distance `maj` the one-sample mixture (T35)
-/// `p = a p_eq + (1 - a) p_maj`, for which `w^2 p = a h / Theta + (1 - a) p_maj w^2`, so the
+/// marched density `maj` the one-sample mixture (T35)
+/// `p = a p_eq + (1 - a) p_med`, for which `w^2 p = a h / Theta + (1 - a) p_med w^2`, so the
 /// weight stays below `Theta / (a h)` (no division by a small `w`). `None` for a degenerate
 /// segment.
 fn towards(
     seg: &Segment,
-    maj: Option<&MajorantDistance>,
+    maj: Option<&MarchedDistance>,
     p: Vec3,
     u: f32,
     clamp: Option<f32>,
@@ -374,7 +375,7 @@ pub(crate) fn single_distance(
     let dist = (p - seg.at(delta)).length();
     let (a, b) = ab;
     let eq_pdf = |t: f32| crate::vrl::sampling::equiangular_pdf(t, delta, dist, a, b);
-    let Some(m) = MajorantDistance::new(&h.majorants, seg.o, seg.d, seg.len) else {
+    let Some(m) = MarchedDistance::new(h, seg.o, seg.d, seg.len) else {
         let t = crate::vrl::sampling::sample_equiangular(u, delta, dist, a, b)?;
         return Some((t, eq_pdf(t)));
     };

@@ -25,7 +25,7 @@ use crate::vrl::Segment;
 use glam::{Mat4, Vec2, Vec3};
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
-use haze_scene::hetero::MajorantDistance;
+use haze_scene::marched::MarchedDistance;
 use haze_scene::{Emitter, Scene};
 
 /// One-sample estimate of single scattering along `cs` from all emitters (those at infinity by
@@ -63,7 +63,7 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
                 let Some(u) = sample_equiangular(u_dist, delta, h, a, b) else { continue };
                 (u, equiangular_pdf(u, delta, h, a, b))
             }
-            // Mixed with the majorant's distance (docs/theory.md §12.5, (T35)).
+            // Mixed with the marched density (docs/theory.md §12.5, (T35)).
             Some(h) => match crate::hetero::single_distance(h, &cs.seg, light.p, (a, b), u_dist) {
                 Some(up) => up,
                 None => continue,
@@ -104,7 +104,7 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
 }
 
 /// Share of the uniform distance in [`from_infinity`]'s mixture: keeps the pdf away from zero
-/// where the exponential or the majorant's distance is small but the light is not.
+/// where the exponential or the marched density is small but the light is not.
 const UNIFORM_SHARE: f32 = 0.2;
 
 /// Single scattering along `cs` from the emitter at infinity `i` (`constant`, `envmap`,
@@ -134,9 +134,9 @@ fn from_infinity(
     let hetero = scene.medium(cs.medium).hetero.as_deref();
     let len = cs.seg.len;
     // The collision density: `(sample, pdf)` closures over the truncated exponential or the
-    // majorant's distance, or none (a thin segment: uniform alone).
+    // marched density (T34), or none (a thin segment: uniform alone).
     let sigma = med.sigma_t.mean();
-    let majorant = hetero.and_then(|h| MajorantDistance::new(&h.majorants, cs.seg.o, cs.seg.d, len));
+    let majorant = hetero.and_then(|h| MarchedDistance::new(h, cs.seg.o, cs.seg.d, len));
     let exponential = hetero.is_none() && sigma * len > 1e-4 && sigma.is_finite();
     let collision_pdf = |u: f32| -> f32 {
         if let Some(m) = &majorant {

@@ -101,6 +101,7 @@ fn render_with(scene: &Scene, method: &str, spp: u32, paths: u64, seed: u64) -> 
         budget: LightBudget::Paths(paths),
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         caustic_paths: None,
+        compensated_clamp: None,
     };
     let lc = Default::default();
     match method {

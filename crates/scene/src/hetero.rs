@@ -203,78 +203,6 @@ impl Iterator for MajorantIter<'_> {
     }
 }
 
-/// The distance to the first tentative collision of the grey majorant `mu = max_c sigma_maj,c`
-/// along `o + t d`, `t` in `[0, len]`, conditioned on one before `len`:
-/// `p(t) = mu(t) exp(-int_0^t mu) / (1 - exp(-int_0^len mu))` (`docs/theory.md` §12.5, (T34)).
-/// A homogeneous proxy of the medium along one segment that follows where its majorant lies:
-/// the many-light estimators mix it into their geometric distance sampling.
-#[derive(Clone, Copy, Debug)]
-pub struct MajorantDistance<'a> {
-    grid: &'a MajorantGrid,
-    o: Vec3,
-    d: Vec3,
-    len: f32,
-    /// `int_0^len mu`.
-    total: f32,
-    /// `1 - exp(-total)`.
-    norm: f32,
-}
-
-impl<'a> MajorantDistance<'a> {
-    /// `None` when the majorant's optical depth over the segment is zero or not finite.
-    pub fn new(grid: &'a MajorantGrid, o: Vec3, d: Vec3, len: f32) -> Option<Self> {
-        let total: f32 =
-            grid.segments(o, d, 0.0, len).map(|g| g.sigma_maj.max_component() * (g.t1 - g.t0)).sum();
-        let norm = -(-total).exp_m1();
-        (total > 0.0 && total.is_finite() && norm > 0.0).then_some(MajorantDistance {
-            grid,
-            o,
-            d,
-            len,
-            total,
-            norm,
-        })
-    }
-
-    /// `t` from `p` by inversion: the optical depth `-ln(1 - u norm)`, found cell by cell.
-    pub fn sample(&self, u: f32) -> f32 {
-        let target = -(-u * self.norm).ln_1p().min(self.total);
-        let mut acc = 0.0f32;
-        let mut last = 0.0f32;
-        for g in self.grid.segments(self.o, self.d, 0.0, self.len) {
-            let mu = g.sigma_maj.max_component();
-            let depth = mu * (g.t1 - g.t0);
-            if mu > 0.0 && acc + depth >= target {
-                return (g.t0 + (target - acc) / mu).clamp(g.t0, g.t1);
-            }
-            acc += depth;
-            if mu > 0.0 {
-                last = g.t1;
-            }
-        }
-        last
-    }
-
-    /// `p(t)`, per unit length (0 outside `[0, len]` and where `mu` is 0).
-    pub fn pdf(&self, t: f32) -> f32 {
-        if !(0.0..=self.len).contains(&t) {
-            return 0.0;
-        }
-        let (mut tau, mut mu_t) = (0.0f32, 0.0f32);
-        for g in self.grid.segments(self.o, self.d, 0.0, t) {
-            let mu = g.sigma_maj.max_component();
-            tau += mu * (g.t1 - g.t0);
-            mu_t = mu;
-        }
-        // `mu(t)` is the last cell's only if that cell reaches `t` (else `t` is past the box).
-        let p = self.o + self.d * t;
-        if !(p.cmpge(self.grid.lo).all() && p.cmple(self.grid.hi).all()) {
-            return 0.0;
-        }
-        mu_t * (-tau).exp() / self.norm
-    }
-}
-
 /// Outcome of delta tracking along a segment, in the path-level spectral MIS form of
 /// `haze_core::transmittance` (`docs/theory.md` §12.3).
 #[derive(Clone, Copy, Debug)]
@@ -580,59 +508,6 @@ mod tests {
                 * 10.0
                 / n as f32;
             assert!((covered - inside).abs() < 0.02, "{covered} vs {inside}");
-        }
-    }
-
-    /// The majorant's distance distribution (T34): its samples by chi-square against the bin
-    /// probabilities of its CDF `(1 - exp(-tau(t))) / (1 - exp(-tau(len)))` (exact: `tau` summed
-    /// over the DDA's cells), and its pdf integrating to the same probabilities, on a ray that
-    /// starts outside the box and one inside it. Negative control: the samples of a majorant
-    /// twice as large fail.
-    #[test]
-    fn majorant_distance_samples_its_pdf() {
-        use haze_testkit::chi2::chi2_test;
-        let m = medium([6, 5, 4], |x, y, z| ((x * 3 + y * 5 + z * 7) % 5) as f32 / 4.0, 4);
-        let mut doubled = m.majorants.clone();
-        for c in &mut doubled.cells {
-            *c *= 2.0;
-        }
-        let d = Vec3::new(1.0, 0.2, 0.1).normalize();
-        for (o, len) in [(Vec3::new(-2.0, 0.1, 1.0), 5.0f32), (Vec3::new(-0.5, 0.0, 0.8), 1.2)] {
-            let dist = MajorantDistance::new(&m.majorants, o, d, len).expect("the ray crosses the medium");
-            let wrong = MajorantDistance::new(&doubled, o, d, len).expect("the ray crosses the medium");
-            let tau = |t: f32| -> f64 {
-                m.majorants
-                    .segments(o, d, 0.0, t)
-                    .map(|g| (g.sigma_maj.max_component() * (g.t1 - g.t0)) as f64)
-                    .sum()
-            };
-            let bins = 40;
-            let cdf = |t: f32| -(-tau(t)).exp_m1() / -(-tau(len)).exp_m1();
-            let edge = |i: usize| len * i as f32 / bins as f32;
-            let expected_p: Vec<f64> = (0..bins).map(|i| cdf(edge(i + 1)) - cdf(edge(i))).collect();
-            // The pdf integrates to the same bin probabilities (midpoint rule, fine steps).
-            for (i, p) in expected_p.iter().enumerate() {
-                let k = 200;
-                let h = len / (bins * k) as f32;
-                let integral: f64 =
-                    (0..k).map(|j| dist.pdf(edge(i) + (j as f32 + 0.5) * h) as f64 * h as f64).sum();
-                assert!((integral - p).abs() < 0.02 * p.max(0.01), "bin {i}: {integral} vs {p}");
-            }
-            let n = 20_000;
-            let mut s = Sampler::from_seed(3);
-            let mut counts = |sample: &MajorantDistance| {
-                let mut c = vec![0.0f64; bins];
-                for _ in 0..n {
-                    let t = sample.sample(s.next_1d());
-                    c[((t / len * bins as f32) as usize).min(bins - 1)] += 1.0;
-                }
-                c
-            };
-            let expected: Vec<f64> = expected_p.iter().map(|p| p * n as f64).collect();
-            let r = chi2_test(&counts(&dist), &expected);
-            assert!(r.passed(0.01), "{o}: {r:?}");
-            let r = chi2_test(&counts(&wrong), &expected);
-            assert!(!r.passed(0.01), "{o}: a majorant twice as large went unnoticed: {r:?}");
         }
     }
 }

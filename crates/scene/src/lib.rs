@@ -15,6 +15,7 @@ pub mod envmap;
 pub mod hetero;
 pub mod interaction;
 pub mod lights;
+pub mod marched;
 pub mod medium;
 pub mod scene;
 pub mod shape;

@@ -41,6 +41,10 @@ pub struct ManyLightSettings {
     /// Caustic paths per pass (`crate::splat`): `None` for the default (one per pixel), `Some(0)`
     /// to leave the caustics seen directly to the camera continuation.
     pub caustic_paths: Option<u64>,
+    /// `Some(c)`: the `1/d^2` of surface VPL -> gathering point connections is clamped at `c`
+    /// and the clamped part recovered by the compensation walk (`crate::gather`, Kollig &
+    /// Keller 2004): unbiased, without the rare huge samples of VPLs near the point.
+    pub compensated_clamp: Option<f32>,
 }
 
 /// The caustic-path tracer of `settings` for `scene`, if the scene has caustics to trace.

@@ -154,10 +154,15 @@ impl Gather for VplGather<'_> {
         self.integrator.caustics.is_some()
     }
 
+    fn compensated_clamp(&self) -> Option<f32> {
+        self.integrator.settings.compensated_clamp
+    }
+
     fn point(&self, gp: &GatherPoint, _key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
         let clamp = self.integrator.surface_clamp;
-        let mut sum = surface_vpls_to_point(scene, &pass.surface_vpls, gp, clamp);
+        let mut sum =
+            surface_vpls_to_point(scene, &pass.surface_vpls, gp, clamp.or(self.compensated_clamp()));
         for vpl in pass.groups.iter().flatten() {
             sum += medium_vpl_to_point(scene, vpl, gp, &pass.media, clamp);
         }

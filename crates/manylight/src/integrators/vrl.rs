@@ -171,6 +171,10 @@ impl Gather for VrlGather<'_> {
         self.integrator.split
     }
 
+    fn compensated_clamp(&self) -> Option<f32> {
+        self.integrator.settings.compensated_clamp
+    }
+
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
         let mut sum = Rgb::ZERO;
@@ -192,8 +196,12 @@ impl Gather for VrlGather<'_> {
                 );
             }
         }
-        (sum + surface_vpls_to_point(scene, &pass.surface_vpls, gp, self.integrator.clamp))
-            * self.integrator.gather_point_scale
+        (sum + surface_vpls_to_point(
+            scene,
+            &pass.surface_vpls,
+            gp,
+            self.integrator.clamp.or(self.compensated_clamp()),
+        )) * self.integrator.gather_point_scale
     }
 }
 

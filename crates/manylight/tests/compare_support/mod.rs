@@ -122,6 +122,7 @@ pub fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
         budget: LightBudget::Paths(paths),
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         caustic_paths: None,
+        compensated_clamp: None,
     }
 }
 

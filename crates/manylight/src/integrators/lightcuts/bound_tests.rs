@@ -61,6 +61,7 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
         budget: LightBudget::Paths(60),
         trace: LightTraceSettings::from_max_depth(-1),
         caustic_paths: None,
+        compensated_clamp: None,
     };
     let settings = LightcutSettings { strategy: CutStrategy::Bound, bound: kind, ..Default::default() };
     let lc = LightcutsIntegrator::<K>::new(scene, ml, settings, seed).unwrap();

@@ -554,6 +554,10 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
         self.integrator.caustics.is_some()
     }
 
+    fn compensated_clamp(&self) -> Option<f32> {
+        self.integrator.ml.compensated_clamp
+    }
+
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
         let pi = PointImportance::new(gp.p, gp.n, pass.sigma_mean);
@@ -606,7 +610,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
             })
         } else {
             self.cut_sum(&pass.surface_tree, &|n| pi.importance(n), key ^ stream, |i| {
-                surface_vpl_to_point(scene, &pass.surface_vpls[i as usize], gp, None)
+                surface_vpl_to_point(scene, &pass.surface_vpls[i as usize], gp, self.compensated_clamp())
             })
         };
         sum * (1.0 / p_tree)
