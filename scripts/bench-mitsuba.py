@@ -8,7 +8,7 @@ For each scene and round it runs every haze binary, then Mitsuba 3, one after th
 in the same window, so machine load hits both alike), and prints per scene the median camera
 samples per second of each, their ratio, and the min-max spread of the ratio over the rounds,
 and the ratio of each renderer's fastest round (this machine runs the same code at two speeds
-about 1.25x apart, docs/performance.md "issue 17, fourteenth part"; the fastest rounds compare
+about 1.25x apart, docs/performance.md §1.3; the fastest rounds compare
 the two renderers in the faster state, given enough rounds).
 Samples per pixel: `--samples / (width * height)` (rounded up to a multiple of 4), the same for
 both renderers. Times are each renderer's own render time (haze: the `in X s` of its report,

@@ -1,6 +1,6 @@
 #!/bin/sh
 # How many ray queries Mitsuba 3 (llvm_ad_rgb) makes per camera sample, and how full its 16-lane
-# Embree packets are (docs/performance.md, "issue 17, twelfth part").
+# Embree packets are (docs/performance.md §1.4, §2.2).
 #
 #   scripts/mitsuba-queries.sh SCENE.xml [SPP] [PYTHON]
 #

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Where a volpath render spends its time, by category (docs/performance.md, "Profile").
+# Where a volpath render spends its time, by category (docs/performance.md §1.2).
 #
 #   scripts/profile.sh SCENE.xml [SPP] [HAZE]
 #

@@ -16,8 +16,11 @@ if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv
 fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -r python/requirements-dev.txt
-# maturin installs into the venv named by VIRTUAL_ENV.
-VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --quiet
+# maturin installs into the venv named by VIRTUAL_ENV. The extension is built as a wheel is, for
+# any x86-64 (pyproject.toml's [tool.maturin] config; docs/performance.md §5.1), in a target
+# directory of its own so that it and the native cargo builds do not rebuild each other's crates.
+VIRTUAL_ENV="$PWD/.venv" CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$PWD/target}/portable" \
+  .venv/bin/maturin develop --release --quiet
 # The metrics test compares with the `haze` command that cargo test built.
 export HAZE_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/haze"
 .venv/bin/python -m pytest python/tests

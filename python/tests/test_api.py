@@ -180,3 +180,17 @@ def test_exr_round_trip(tmp_path):
 def test_files_lists_what_the_scene_reads(small_box):
     assert haze.load_scene(small_box).files == [str(small_box)]
     assert pathlib.Path(haze.load_scene(small_box).path) == small_box
+
+
+def test_the_extension_is_built_for_any_x86_64():
+    """The build this suite tests (maturin, with pyproject.toml's [tool.maturin] config, as a wheel
+    or `pip install .` is) uses no instruction beyond x86-64-v1 outside the run-time-dispatched
+    AVX2 node test, so it runs on every Ray worker (docs/performance.md §5.1)."""
+    import platform
+
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        pytest.skip("the portable baseline is checked on x86-64 only")
+    assert haze._haze.compiled_features() == [], (
+        "the extension was compiled for a newer CPU than x86-64 (RUSTFLAGS set? pyproject.toml's "
+        "[tool.maturin] config not applied?)"
+    )

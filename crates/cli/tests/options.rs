@@ -267,3 +267,53 @@ fn readme_usage_names_exactly_the_options_of_help() {
         }
     }
 }
+
+/// A value the README's `haze render` usage writes out for an option of the engine's table is
+/// that option's default (`[--cut-size 1]`), and the first choice of a list (`[--cut
+/// stochastic|bound]`) is the default when it has one; placeholders are capitals (`[--spp N]`).
+#[test]
+fn readme_usage_values_are_the_defaults() {
+    use haze_engine::options::{find, Default};
+    let usage = readme_usage();
+    let render = &usage.iter().find(|(c, _)| c == "render").expect("render usage").1;
+    let words: Vec<&str> = render.split_whitespace().map(|w| w.trim_matches(['[', ']'])).collect();
+    let mut checked = 0;
+    for pair in words.windows(2) {
+        let (Some(flag), value) = (pair[0].strip_prefix("--"), pair[1]) else { continue };
+        let Some(spec) = find(&flag.replace('-', "_")) else { continue };
+        if value.starts_with('-') || value.chars().all(|c| c.is_ascii_uppercase()) {
+            continue;
+        }
+        let shown = value.split('|').next().unwrap();
+        match spec.default {
+            Default::Value(d) => assert_eq!(
+                shown, d,
+                "README's `haze render` usage shows --{flag} {value}; the default is {d}"
+            ),
+            Default::Unset(_) if value.contains('|') => {}
+            Default::Unset(what) => {
+                panic!("README's `haze render` usage shows --{flag} {value}; it has no default ({what})")
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked >= 6, "only {checked} values checked in the render usage: {render}");
+}
+
+/// docs/python.md's `Scene.render(...)` signature names every option of the engine's table, in
+/// the table's order (the Python signatures are checked against the table by
+/// `python/tests/test_options.py`; this keeps the document with them).
+#[test]
+fn python_doc_signature_names_every_option() {
+    let doc = std::fs::read_to_string(repo("docs/python.md")).unwrap();
+    let start = doc.find("`Scene.render(").expect("docs/python.md has the Scene.render signature");
+    let sig = &doc[start..start + doc[start..].find(")`").expect("signature ends")];
+    let named: Vec<&str> = sig
+        .split(['(', ','])
+        .skip(1)
+        .map(|p| p.split('=').next().unwrap().trim())
+        .filter(|n| !n.is_empty() && *n != "*" && *n != "integrator")
+        .collect();
+    let table: Vec<&str> = OPTIONS.iter().map(|o| o.name).collect();
+    assert_eq!(named, table, "docs/python.md's Scene.render signature against the engine's table");
+}

@@ -3,8 +3,7 @@
 //! sampling, the concentric disk). glibc's `atan2f`, `acosf` and `sincosf` are calls of 40-120
 //! instructions with branches for arguments these mappings never pass (huge, subnormal); the
 //! polynomials here are within a few f32 ulps of the exact value on the ranges stated, which
-//! the tests below check against f64 on dense grids (docs/performance.md, "issue 17, sixteenth
-//! part").
+//! the tests below check against f64 on dense grids (docs/performance.md §4.3).
 
 use std::f32::consts::{FRAC_PI_2, PI};
 

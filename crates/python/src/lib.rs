@@ -200,12 +200,44 @@ fn write_png(path: std::path::PathBuf, image: PyReadonlyArrayDyn<'_, f32>, expos
         .map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))
 }
 
+/// The x86-64 target features beyond the baseline (x86-64-v1: SSE2) that this extension was
+/// compiled with, empty for a portable build (docs/performance.md §5.1): a wheel built for the
+/// building CPU would name AVX2 or AVX-512 here and could die of SIGILL on another CPU. The AVX2
+/// node test is chosen at run time and does not count (it is not compiled in globally).
+#[pyfunction]
+fn compiled_features() -> Vec<&'static str> {
+    macro_rules! enabled {
+        ($($f:tt),*) => { [$((cfg!(target_feature = $f), $f)),*] };
+    }
+    let all = enabled!(
+        "sse3",
+        "ssse3",
+        "sse4.1",
+        "sse4.2",
+        "popcnt",
+        "cmpxchg16b",
+        "avx",
+        "avx2",
+        "fma",
+        "bmi1",
+        "bmi2",
+        "lzcnt",
+        "movbe",
+        "f16c",
+        "avx512f",
+        "avx512vl",
+        "avx512bw"
+    );
+    all.into_iter().filter(|(on, _)| *on).map(|(_, f)| f).collect()
+}
+
 #[pymodule]
 fn _haze(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     let names: Vec<&str> = haze_engine::MethodKind::ALL.iter().map(|m| m.name()).collect();
     m.add("METHOD_NAMES", PyTuple::new(m.py(), names)?)?;
     m.add_function(wrap_pyfunction!(method_options, m)?)?;
+    m.add_function(wrap_pyfunction!(compiled_features, m)?)?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<film::Film>()?;
     m.add_function(wrap_pyfunction!(scene::load_scene, m)?)?;

@@ -1,7 +1,7 @@
-//! Majorant grid against one global majorant (issue 15, `docs/performance.md` "Heterogeneous
-//! media"): for each heterogeneous medium of each scene, the mean majorant optical depth
-//! `int sigma_maj dt` (the expected number of density lookups of delta and ratio tracking) along
-//! random rays through the medium's box, then volpath's render time at equal spp with each.
+//! Majorant grid against one global majorant (issue 15, `docs/performance.md` §4.5): for each
+//! heterogeneous medium of each scene, the mean majorant optical depth `int sigma_maj dt` (the
+//! expected number of density lookups of delta and ratio tracking) along random rays through the
+//! medium's box, then volpath's render time at equal spp with each.
 //!
 //! `cargo run --release -p haze-render --example majorant_probe -- SCENE.xml... [--spp N]`
 

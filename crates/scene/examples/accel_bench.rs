@@ -2,7 +2,7 @@
 //! (`intersect`) and shadow segments (`shadow_hits`) from seeded random points in the scene's
 //! bounds, and shadow segments from the closest hits' points (rays leaving a surface, as in
 //! next-event estimation at a surface) to the same random points. For measuring traversal
-//! changes (docs/performance.md), not a test.
+//! changes (docs/performance.md §1.4), not a test.
 //!
 //!     cargo run --release -p haze-scene --example accel_bench -- SCENE.xml [RAYS]
 

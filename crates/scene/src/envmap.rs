@@ -376,7 +376,7 @@ impl EnvMap {
     /// `q`), the sample then finds everything in cache; when it goes to its alias, that cell's
     /// lines are still fetched then. A caller that knows the random numbers of a coming sample calls this before other
     /// work (a ray traversal), so that the cache misses overlap it instead of stalling the
-    /// sample (volpath's next-event estimation: docs/performance.md, "issue 17, seventh part").
+    /// sample (volpath's next-event estimation: docs/performance.md §4.1).
     #[inline]
     pub fn prefetch(&self, u: glam::Vec2) {
         if self.total <= 0.0 {

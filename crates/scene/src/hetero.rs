@@ -82,8 +82,8 @@ impl MajorantGrid {
         // crossings: one cell instead. The measure is ratio tracking's (and the largest
         // channel's): the mean over the cells of the largest channel's bound, the expected
         // tentative collisions per unit length, against the global bound's
-        // (docs/performance.md, "Majorant grid against one global majorant": on the noisy peer
-        // grid the two were equal and one cell 8% faster).
+        // (docs/performance.md §4.5: on the noisy peer grid the two were equal and one cell 8%
+        // faster).
         let global = cells.iter().fold(Rgb::ZERO, |m, c| m.max(*c));
         let mean_max =
             cells.iter().map(|c| c.max_component() as f64).sum::<f64>() / cells.len().max(1) as f64;

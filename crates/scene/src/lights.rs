@@ -48,8 +48,7 @@ impl Scene {
     /// numbers `sampler` gives next (`next_1d`, then `next_2d`), for an environment map (its
     /// large tables are the misses; other emitters read little). `sampler` is not advanced: a
     /// copy draws the numbers. Worth it only where those are the next-event estimation's numbers
-    /// and a ray traversal follows before it (volpath, docs/performance.md "issue 17, seventh
-    /// part").
+    /// and a ray traversal follows before it (volpath, docs/performance.md §4.1).
     #[inline]
     pub fn prefetch_emitter_sample(&self, sampler: &haze_core::Sampler) {
         if !self.emitter_tables.has_envmap {

@@ -2,11 +2,16 @@
 //! `§2, §6`) or an equation of `docs/theory.md` (`(T7)`) point at something that exists: a
 //! numbered heading of that document (`## 7. ...`, `### 7.3 ...`) or an equation tag at the end
 //! of a line of `docs/theory.md`. A comment that names `docs/theory.md` must also say where in
-//! it (a section or an equation), on its line or the next.
+//! it (a section or an equation), on its line or the next, and so must one that names a document
+//! of [`BY_SECTION`] (a section), so that no comment cites a passage by a name the document may
+//! lose (a session's narrative, "issue 17, fifth part").
 
 use haze_testkit::data::repo_root;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+
+/// Documents that comments must cite by section number (`docs/performance.md §3.1`).
+const BY_SECTION: &[&str] = &["performance.md"];
 
 /// What a document offers to cite: its numbered sections and its equation tags.
 #[derive(Default)]
@@ -120,8 +125,13 @@ fn broken_citations(
                     }
                 }
             }
+            let next = comments.get(k + 1).filter(|&&(n, _)| n == line_no + 1).map_or("", |(_, l)| l);
+            for doc in BY_SECTION.iter().filter(|d| line.contains(*d)) {
+                if !line.contains('§') && !next.contains('§') {
+                    errors.push(format!("{at}: names {doc} without a section (§N)"));
+                }
+            }
             if line.contains(theory) {
-                let next = comments.get(k + 1).filter(|&&(n, _)| n == line_no + 1).map_or("", |(_, l)| l);
                 let says_where = |l: &str| {
                     l.contains('§') || l.match_indices("(T").any(|(p, _)| equation_tag(&l[p..]).is_some())
                 };
@@ -202,4 +212,8 @@ fn broken_citations_are_caught() {
     assert_eq!(check("// docs/other.md §1").len(), 1, "unknown document");
     assert_eq!(check("// docs/theory.md, VPL estimator").len(), 1, "no section named");
     assert_eq!(check("let x = \"§9\"; // not a comment line").len(), 0);
+    assert_eq!(
+        check("// docs/performance.md, \"issue 17, fifth part\""),
+        vec!["x.rs:1: names performance.md without a section (§N)".to_string()]
+    );
 }

@@ -1,4 +1,4 @@
-//! Closest hits of camera rays from a grid over the film (issue 17, fifteenth part).
+//! Closest hits of camera rays from a grid over the film (docs/performance.md §3.4).
 //!
 //! Every camera ray leaves the pinhole, so the rays through one region of the film lie in one
 //! pyramid with its apex at the pinhole. [`CameraGrid`] cuts the film into cells and keeps, per
@@ -6,7 +6,7 @@
 //! their distance from the pinhole. A camera ray then tests its cell's leaves in that order and
 //! stops at the first leaf that starts beyond its closest hit so far: no node of the tree is
 //! visited. On the Mitsuba 3 peer scenes (48x48 pixels, spheres of 5-12k triangles) a cell
-//! holds about 12 leaves, of which a camera ray tests about 4 (docs/performance.md).
+//! holds about 12 leaves, of which a camera ray tests about 4 (docs/performance.md §3.4).
 //!
 //! The answer is the tree's: every leaf holding a triangle that a ray of the cell can meet is in
 //! the cell's list (the pyramid is widened by a margin far above the rounding of the rays'
@@ -39,7 +39,7 @@ const MAX_TESTS: usize = 48;
 /// Fewest nodes a closest-hit tree needs for a grid. In a smaller tree (rooms and boxes of a few
 /// dozen triangles) a camera ray visits one or two nodes, and the grid's cell lookup cost about
 /// what it saved: hg-box, bench-fog-shadow and bench-spot-beam (1-3 nodes) measured 3-7% slower
-/// with a grid (docs/performance.md, "issue 17, fifteenth part").
+/// with a grid (docs/performance.md §3.4).
 const MIN_NODES: usize = 16;
 
 /// Longest list a cell keeps (memory: 8 bytes per entry).

@@ -1,15 +1,14 @@
 //! Ray queries over all shapes: triangles of every mesh in one bounding volume hierarchy
-//! (built by `obvhs`, chosen by measurement: see `tools/bvh-candidates/README.md`), tested with
+//! (built by `obvhs`, chosen by measurement: docs/performance.md §3.1), tested with
 //! a watertight triangle test; analytic spheres and disks tested directly (scenes have few of
 //! them).
 //!
 //! obvhs builds a binary tree with leaves of up to 4 triangles; the 8-wide trees the traversal
-//! reads and the traversal are ours (docs/performance.md, "Traversal of the peer scenes",
-//! "Front-to-back traversal and per-query costs" and "issue 17, fourth part"): [`wide`]
+//! reads and the traversal are ours (docs/performance.md §3.1, §3.2): [`wide`]
 //! collapses the binary tree twice over the same leaves (one collapse for closest hits, one for
-//! shadow rays: "issue 17, tenth part") into nodes of 8 f32 child boxes tested at once (in one
+//! shadow rays: §3.1) into nodes of 8 f32 child boxes tested at once (in one
 //! AVX2 vector per plane where the CPU has AVX2, detected when the `Accel` is built, else in two
-//! SSE vectors: "issue 17, fifth part"), the loop
+//! SSE vectors: docs/performance.md §3.3), the loop
 //! ([`Accel::traverse`]) visits the nearest hit child first and prunes pushed children by their
 //! entry distance, and each leaf's 1-4 triangles are tested at once in SSE lanes
 //! ([`WatertightRay::intersect_packet`], bit-identical to the scalar test).
@@ -23,7 +22,7 @@
 //!   [`BOX_PAD`] times the largest coordinate in the scene (far more than the few ulps the
 //!   slab test can be off, even with obvhs's clamped `1/d` for near-axis directions). The
 //!   node boxes are the binary tree's, which enclose these padded boxes.
-//! - obvhs's node test (used until the third part) clamped the entry distance of every box to
+//! - obvhs's node test (used before our traversal, docs/performance.md §3.2) clamped the entry distance of every box to
 //!   `1e-4` (`cwbvh::node::EPSILON`), so a box the ray leaves before `t = 1e-4` was skipped: a wall
 //!   just in front of a point in a medium, or the adjacent wall at a corner. The traversal ray
 //!   therefore starts [`ORIGIN_BACKOFF`] behind the real origin, and the triangle tests (from
@@ -67,7 +66,7 @@ const BOX_PAD: f32 = 2e-6;
 const ORIGIN_BACKOFF: f32 = 2e-4;
 
 /// Largest coordinate magnitude of scene geometry haze accepts. obvhs's compressed wide BVH
-/// (traversed until issue 17's fourth part) stored node boxes with an 8-bit exponent and
+/// (traversed before our own wide trees, docs/performance.md §3.1) stored node boxes with an 8-bit exponent and
 /// panicked on a cube scaled by `1e30`. The watertight triangle test multiplies
 /// three coordinate differences, which overflows f32 beyond about `7e12`; rays then pass
 /// through walls. `1e12` keeps every product finite for rays within the scene.
@@ -292,8 +291,7 @@ fn prefetch(x: &LeafIds) {
 /// x86-64). Where each triangle came from is in [`LeafIds`], read once per query for the hit:
 /// with the ids and normals in the leaf (256 bytes) every leaf test touched lines of a larger
 /// array, and the queries were slower although the hit's ids then came without a cache miss
-/// (docs/performance.md, "issue 17, eighth part": roughdielectric_spot -5..-7.5%, the rooms
-/// -1..-1.6%).
+/// (docs/performance.md §3.1: roughdielectric_spot -5..-7.5%, the rooms -1..-1.6%).
 #[derive(Clone, Copy, Debug)]
 struct Leaf {
     packet: TriPacket,
@@ -358,15 +356,15 @@ pub struct Accel {
 /// SAH leaf collapse with a node traversal cost of 2 triangle tests: obvhs's default 3 made
 /// leaves of four large wall triangles in the room scenes, whose box every ray enters (foggy-room
 /// and bench-fog-shadow 13-15% slower than with 2; 1 and 0.5 measured like 2 there and 2-7%
-/// slower than 3 on the peer spheres; docs/performance.md, "issue 17, fourth part").
+/// slower than 3 on the peer spheres; docs/performance.md §3.1).
 fn build_params(triangles: usize) -> BvhBuildParams {
     let mut p =
         if triangles <= 1_000_000 { BvhBuildParams::slow_build() } else { BvhBuildParams::medium_build() };
     if triangles <= 1_000_000 {
         // PLOC's full search at every depth (`slow_build` searches only 1 neighbour in the top
         // levels) over 32 neighbours instead of 24: on the rays logged from the peer renders,
-        // 7-10% faster closest hits inside the glass spheres (docs/performance.md, "issue 17,
-        // seventh part"), for +0.1-0.2 s of build at 400k triangles.
+        // 7-10% faster closest hits inside the glass spheres (docs/performance.md §3.1), for
+        // +0.1-0.2 s of build at 400k triangles.
         p.search_depth_threshold = 0;
         p.ploc_search_distance = obvhs::ploc::PlocSearchDistance::VeryHigh;
     }
@@ -491,8 +489,7 @@ impl Accel {
     /// al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing", section 4.2, which
     /// sorts all hit children). obvhs's `traverse!` instead visits children in an order fixed
     /// per ray octant and cannot prune a pushed group by distance, so a closest-hit ray tested
-    /// boxes and leaves behind its hit (docs/performance.md, "Front-to-back traversal and per-query
-    /// costs").
+    /// boxes and leaves behind its hit (docs/performance.md §3.2).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn traverse<const ORDERED: bool, K: NodeTest>(

@@ -5,8 +5,7 @@
 //!
 //! obvhs builds the binary tree (PLOC, reinsertion, and its SAH leaf collapse into leaves of up
 //! to [`LEAF_SIZE`] triangles: `obvhs::bvh2::builder::build_bvh2`); [`WideBvh::new`] turns it
-//! into two `WIDTH`-wide trees over the same leaves (docs/performance.md, "issue 17, tenth
-//! part"): for closest-hit queries the collapse that minimises the surface area heuristic's cost
+//! into two `WIDTH`-wide trees over the same leaves (docs/performance.md §3.1): for closest-hit queries the collapse that minimises the surface area heuristic's cost
 //! ([`CollapsePlan`], Ylitie, Karras and Laine 2017), and for queries that visit every box along
 //! a segment (shadow rays) the greedy one, the way wide BVHs are usually built from binary ones
 //! (Wald, Benthin and Boulos 2008, "Getting Rid of Packets"): a node's children are found by
@@ -14,8 +13,8 @@
 //! children or none left to open. The binary tree's leaves stay leaves, so each holds up to four
 //! triangles, one SSE packet (`WatertightRay::intersect_packet`).
 //!
-//! Why not obvhs's compressed wide BVH (`CwBvh`), traversed until docs/performance.md's "issue
-//! 17, fourth part": its leaves hold at most 3 triangles (a unary 3-bit count), so one packet lane
+//! Why not obvhs's compressed wide BVH (`CwBvh`), traversed before (docs/performance.md §3.1):
+//! its leaves hold at most 3 triangles (a unary 3-bit count), so one packet lane
 //! in four was always empty, and its child boxes are quantised to 8 bits per plane, which we
 //! decoded once into 256-byte nodes anyway. Here the boxes are the binary tree's exact f32 boxes
 //! of the padded triangle boxes (`BOX_PAD` in `mod.rs`), so the node test is as conservative as
@@ -252,9 +251,9 @@ impl NodeTest for Avx2 {
     }
 }
 
-/// The 8-lane node test (docs/performance.md, "issue 17, fifth part"): one 256-bit vector per
-/// plane and fused multiply-adds ("twelfth part"), chosen at run time, while the default build
-/// stays portable (no `target-cpu`).
+/// The 8-lane node test (docs/performance.md §3.3): one 256-bit vector per plane and fused
+/// multiply-adds, chosen at run time, so a build for any x86-64 uses it too where the CPU has
+/// AVX2.
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::{near_planes, NodeTest, WideNode, WIDTH};
@@ -337,8 +336,7 @@ mod avx2 {
         for a in 0..3 {
             let n = ray.near[a];
             // One fused operation instead of a subtraction and a product: the plane distances
-            // are the start of each node's dependency chain (-2 to -3% per render, docs/
-            // performance.md, "issue 17, twelfth part").
+            // are the start of each node's dependency chain (docs/performance.md §3.3).
             let t_near = _mm256_fmsub_ps(_mm256_load_ps(plane(n)), ray.inv[a], ray.o_inv[a]);
             let t_far = _mm256_fmsub_ps(_mm256_load_ps(plane(n ^ 1)), ray.inv[a], ray.o_inv[a]);
             lo = _mm256_max_ps(lo, t_near);

@@ -187,7 +187,7 @@ impl Microfacet {
 /// (a logarithm and a polynomial of degree 8) per evaluation and one more for the slope: a
 /// visible Beckmann normal then cost 150-180 ns, as much as a closest-hit query; in `x` it costs
 /// 130-150 ns, and 125-130 ns with the last Newton step unevaluated ([`Self::solve`];
-/// docs/performance.md, "issue 17, eleventh part").
+/// docs/performance.md §4.2).
 struct BeckmannSlopeCdf {
     tan_theta_i: f32,
     /// The largest slope, `cot(theta_i)`, capped at [`X_LIMIT`].
@@ -275,7 +275,7 @@ const INV_SQRT_PI: f32 = std::f32::consts::FRAC_2_SQRT_PI * 0.5;
 /// `v = sqrt(1 - u)`, the starting point of its Newton steps (built once, 38 KB). In `v` the
 /// slope is smooth where it approaches the edge-on one, whose density vanishes linearly; at the
 /// other end, below [`U_TAIL`], it goes as `-sqrt(-ln u)`, and a second table over
-/// `q = sqrt(-ln u)` takes over (the eighth part of docs/performance.md's issue 17 tabulated
+/// `q = sqrt(-ln u)` takes over (an earlier table, docs/performance.md §4.2, held
 /// `b = erf(x)`, smooth at both ends in `v`, but each Newton step in `b` costs an `erfinv`). A
 /// table 4 times finer (132 KB) needed fewer evaluations in isolation and was no faster there.
 struct BeckmannTable {

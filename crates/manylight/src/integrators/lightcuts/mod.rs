@@ -7,8 +7,10 @@
 //!
 //! Component split as in `vrl`/`vpl`: lights that follow a surface bounce live in a tree of
 //! their own, so `multiple` and `surface` stay separate. The camera walk is `vrl`'s
-//! (`gather.rs`, the whole image); surface VPLs and gathering surface points are served by
-//! power sampling (`surface.rs`), not by the trees.
+//! (`gather.rs`, the whole image). The surface VPLs get a tree of their own (`surface.rs`), cut
+//! stochastically for camera segments; a gathering surface point picks one of the three trees
+//! and cuts it stochastically with the point's importance, whatever `--cut` says (`surface.rs`,
+//! docs/lightcuts.md "The whole image").
 
 #[cfg(test)]
 mod bound_tests;
