@@ -105,6 +105,9 @@ impl Method {
                 scene.camera.plugin_name()
             );
         }
+        if kind != MethodKind::VolPath && scene.emitters.iter().any(|e| e.is_textured_spot()) {
+            bail!("integrator '{kind}' does not support spot lights with a 'texture' (render with volpath)");
+        }
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {

@@ -47,3 +47,18 @@ fn many_light_methods_refuse_cameras_without_a_pinhole() {
         assert!(Method::build(&scene, MethodKind::VolPath, &options.method, 1).is_ok());
     }
 }
+
+/// A spot light with a `texture` renders with volpath only: the many-light methods' light
+/// estimators have no texture, so they refuse it by name.
+#[test]
+fn many_light_methods_refuse_textured_spots() {
+    use haze_engine::methods::Method;
+    let xml = r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+        <emitter type="spot"><rgb name="texture" value="0.5"/></emitter></scene>"#;
+    let scene = load_str(xml, Path::new("t.xml"), Path::new("."), &LoadOptions::default()).unwrap();
+    let options = resolve(MethodKind::Vrl, &[], Spelling::Flag).unwrap();
+    let e = Method::build(&scene, MethodKind::Vrl, &options.method, 1).err().expect("an error").to_string();
+    assert!(e.contains("spot lights with a 'texture'"), "{e}");
+    let options = resolve(MethodKind::VolPath, &[], Spelling::Flag).unwrap();
+    assert!(Method::build(&scene, MethodKind::VolPath, &options.method, 1).is_ok());
+}

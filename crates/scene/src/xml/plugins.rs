@@ -146,7 +146,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("phase", "isotropic", &[]),
     ("phase", "hg", &["g"]),
     ("emitter", "point", &["position", "intensity", "to_world"]),
-    ("emitter", "spot", &["to_world", "intensity", "cutoff_angle", "beam_width"]),
+    ("emitter", "spot", &["to_world", "intensity", "cutoff_angle", "beam_width", "texture"]),
     ("emitter", "area", &["radiance"]),
     ("emitter", "constant", &["radiance"]),
     ("emitter", "envmap", &["filename", "scale", "to_world"]),
