@@ -7,7 +7,7 @@ spp with haze, and writes a table: loads, renders, and the image mean against Mi
 a reference is at hand (the test scenes' `refs/NAME_ref_rgb.exr`, rendered by Mitsuba's own test
 suite). Not run by CI: it downloads about 180 MB and renders for several minutes.
 
-    python3 scripts/corpus-check.py [--haze target/release/haze] [--spp 16] [--out corpus.md]
+    python3 scripts/corpus-check.py [--haze target/release/haze] [--spp 16] [--threads 1] [--out corpus.md]
 
 Environment:
   HAZE_CORPUS_DIR   an existing checkout of mitsuba-data at the pinned commit (else the script
@@ -273,6 +273,7 @@ def main():
     root = Path(__file__).resolve().parent.parent
     ap.add_argument("--haze", default=str(root / "target/release/haze"))
     ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--threads", type=int, default=1, help="haze render --threads (1: a shared machine)")
     ap.add_argument("--timeout", type=float, default=300)
     ap.add_argument("--out", default="corpus.md")
     args = ap.parse_args()
@@ -283,7 +284,7 @@ def main():
     for rel in [s for s in SCENES if only in s]:
         scene = data / rel
         out = tmp / (rel.replace("/", "_") + ".exr")
-        base = [args.haze, "render", scene.name, "-o", str(out), "--spp", str(args.spp), "-q"]
+        base = [args.haze, "render", scene.name, "-o", str(out), "--spp", str(args.spp), "--threads", str(args.threads), "-q"]
         for d in DEFINES:
             base += ["-D", d]
         via = ""

@@ -506,7 +506,8 @@ fn gather<I: Integrator>(scene: &haze_scene::Scene, integ: &I, data: &I::PassDat
             for x in 0..cam.width {
                 let mut sampler = Sampler::new(round, (y * cam.width + x) as u64, 0);
                 for _ in 0..spp {
-                    let ray = rays.generate(cam.sample_film_position(x, y, &mut sampler));
+                    let pos = cam.sample_film_position(x, y, &mut sampler);
+                    let ray = rays.sample(pos, &mut sampler);
                     sum += integ.radiance(scene, data, ray, cam.medium, &mut sampler).total().mean() as f64;
                 }
             }

@@ -97,6 +97,18 @@ impl Method {
         };
         // Name the method in a refusal (e.g. an environment emitter): "integrator 'vrl': ...".
         let named = |e: haze_scene::lights::EmissionError| anyhow!("integrator '{kind}': {e}");
+        // The many-light methods connect light paths to the pinhole (their caustic paths splat
+        // through it), which a thin lens or an orthographic camera does not have.
+        if kind != MethodKind::VolPath && !scene.camera.is_pinhole() {
+            bail!(
+                "integrator '{kind}' needs a pinhole camera (sensor type 'perspective'); this scene's \
+                 sensor is '{}': render it with volpath",
+                scene.camera.plugin_name()
+            );
+        }
+        if kind != MethodKind::VolPath && scene.emitters.iter().any(|e| e.is_textured_spot()) {
+            bail!("integrator '{kind}' does not support spot lights with a 'texture' (render with volpath)");
+        }
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {

@@ -170,7 +170,7 @@ pub fn render<I: Integrator>(
                         sampler.start_sample(pass * spp_per_pass as u64 + j);
                         // The reconstruction filter by importance sampling (see `PixelFilter`).
                         let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
-                        let ray = rays.generate(pos);
+                        let ray = rays.sample(pos, &mut sampler);
                         let medium = scene.camera_medium(&ray, cam.medium);
                         let mut r = integrator.radiance(scene, data, ray, medium, &mut sampler);
                         r.add(Component::Surface, integrator.pixel_light(data, pixel));

@@ -10,6 +10,7 @@ fn camera(medium: Option<u32>) -> Camera {
     Camera {
         filter: haze_scene::camera::PixelFilter::Box,
         to_world: Mat4::IDENTITY,
+        projection: haze_scene::camera::Projection::Pinhole,
         fov_x_deg: 30.0,
         near_clip: 0.0,
         far_clip: 1e4,

@@ -168,6 +168,31 @@ impl Bitmap {
         }
     }
 
+    /// The gradient with respect to `uv` of the luminance of [`Self::eval`] (Mitsuba's
+    /// `eval_1_grad`, which bump maps read): zero for `nearest`; for `bilinear`, with `(x, y)`
+    /// the texel-space position and `f` the luminance of the four texels around it,
+    /// `df/dx = (f10 - f00)(1 - fy) + (f11 - f01) fy`, `df/dy = (f01 - f00)(1 - fx) + (f11 - f10) fx`,
+    /// scaled by the resolution and carried back through `to_uv` (the transpose of its linear
+    /// part).
+    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+        let res = Vec2::new(self.width as f32, self.height as f32);
+        let p = self.to_uv.transform_point2(uv) * res;
+        if !p.is_finite() || self.filter == FilterType::Nearest {
+            return Vec2::ZERO;
+        }
+        let q = p - Vec2::splat(0.5);
+        let (x0, y0) = (q.x.floor(), q.y.floor());
+        let (fx, fy) = (q.x - x0, q.y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let f = |x, y| self.texel(x, y).luminance();
+        let (f00, f10, f01, f11) = (f(x0, y0), f(x0 + 1, y0), f(x0, y0 + 1), f(x0 + 1, y0 + 1));
+        let d = Vec2::new(
+            (f10 - f00) * (1.0 - fy) + (f11 - f01) * fy,
+            (f01 - f00) * (1.0 - fx) + (f11 - f10) * fx,
+        );
+        self.to_uv.matrix2.transpose() * (d * res)
+    }
+
     /// The mean of the texels (Mitsuba's `Texture::mean`).
     pub fn mean(&self) -> Rgb {
         self.mean

@@ -198,13 +198,27 @@ impl Scene {
     /// on a `null` surface and a surface that is not `null` touches it there, that surface's
     /// interaction (at `h`'s distance) instead (`docs/theory.md` §14, rule 1). Every
     /// closest-hit answer of the scene goes through here ([`Self::intersect`],
-    /// [`Self::interaction`]).
+    /// [`Self::interaction`]). A normal- or bump-mapped surface's hit gets its perturbed shading
+    /// normal here too.
     #[inline]
     pub fn resolve_hit(&self, h: SurfaceInteraction) -> SurfaceInteraction {
-        if !self.touches_at(h.shape, h.prim) || !self.shapes[h.shape as usize].bsdf.is_null() {
-            return h;
+        let h = if !self.touches_at(h.shape, h.prim) || !self.shapes[h.shape as usize].bsdf.is_null() {
+            h
+        } else {
+            self.resolve_touching(h)
+        };
+        match &self.shapes[h.shape as usize].bsdf {
+            crate::bsdf::Bsdf::Perturbed(p) => self.perturb(h, p),
+            _ => h,
         }
-        self.resolve_touching(h)
+    }
+
+    /// `h` with the shading normal of the normal or bump map `p` (see [`crate::bsdf::Perturbed`]).
+    #[cold]
+    fn perturb(&self, h: SurfaceInteraction, p: &crate::bsdf::Perturbed) -> SurfaceInteraction {
+        let geometry = &self.shapes[h.shape as usize].geometry;
+        let (dp_du, dp_dv) = crate::shape::tangents::uv_tangents(geometry, h.prim, h.p, h.n);
+        SurfaceInteraction { ns: p.shading_normal(h.uv, h.n, h.ns, dp_du, dp_dv), ..h }
     }
 
     #[cold]
@@ -296,7 +310,8 @@ impl Scene {
     /// directions into the box, whichever side its declared medium is).
     #[inline]
     pub fn camera_medium(&self, ray: &Ray, declared: Option<MediumId>) -> Option<MediumId> {
-        if !self.any_transition {
+        // Rays of a thin lens or an orthographic camera start apart: the declared medium.
+        if !self.any_transition || !self.camera.is_pinhole() {
             return declared;
         }
         self.pinhole_boundary().medium_towards(ray.d, declared)

@@ -1,17 +1,21 @@
-//! Perspective pinhole camera (Mitsuba 3 plugin `perspective`) and the film's reconstruction
-//! filter (`rfilter`: `box`, `tent`, `gaussian`).
+//! The camera (Mitsuba 3 sensors `perspective`, `thinlens`, `orthographic`) and the film's
+//! reconstruction filter (`rfilter`: `box`, `tent`, `gaussian`).
 
 use crate::medium::MediumId;
 use glam::{Mat4, Vec2, Vec3};
+use haze_core::sampling::sample_uniform_disk_concentric;
 use haze_core::{Ray, Sampler};
 
-/// Pinhole camera. Camera space follows Mitsuba: looking down `+z`, `+y` up, `+x` to the
+/// The camera. Camera space follows Mitsuba: looking down `+z`, `+y` up, `+x` to the
 /// *left* (so `lookat` builds `to_world` with columns `(left, up, dir, origin)`). Film pixel
 /// `(0, 0)` is the top-left corner of the image.
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub to_world: Mat4,
-    /// Full horizontal field of view in degrees (the loader resolves `fov_axis` to this).
+    /// How film positions become rays: a pinhole (`perspective`), a thin lens or parallel rays.
+    pub projection: Projection,
+    /// Full horizontal field of view in degrees (the loader resolves `fov_axis` to this); not
+    /// used by [`Projection::Orthographic`].
     pub fov_x_deg: f32,
     pub near_clip: f32,
     pub far_clip: f32,
@@ -21,6 +25,21 @@ pub struct Camera {
     pub height: u32,
     /// Reconstruction filter of the film.
     pub filter: PixelFilter,
+}
+
+/// The projection of a [`Camera`], as Mitsuba 3's sensor plugins generate their rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// `perspective`: every ray through the pinhole at the camera-space origin.
+    Pinhole,
+    /// `thinlens`: rays from a point of a disk of radius `aperture_radius` in the camera's
+    /// `z = 0` plane, through the point of the plane `z = focus_distance` that the pinhole ray
+    /// of the same film position reaches (Mitsuba 3's `thinlens.cpp`): in focus there.
+    ThinLens { aperture_radius: f32, focus_distance: f32 },
+    /// `orthographic`: parallel rays along camera `+z` from the film rectangle
+    /// `[-1, 1] x [-1/aspect, 1/aspect]` (`aspect = width / height`) on the near clip plane,
+    /// which `to_world`'s scale sizes (Mitsuba 3's `orthographic_projection`).
+    Orthographic,
 }
 
 /// A film's reconstruction filter, separable in x and y, as Mitsuba 3's `rfilter` plugins
@@ -125,8 +144,9 @@ impl Camera {
 }
 
 impl Camera {
-    /// Primary ray through the film position `p` in pixel units (`[0, width) x [0, height)`).
-    /// The ray starts at the near clip plane and ends at the far clip plane, as in Mitsuba.
+    /// Primary ray through the film position `p` in pixel units (`[0, width) x [0, height)`),
+    /// through the centre of a thin lens. The ray starts at the near clip plane and ends at the
+    /// far clip plane, as in Mitsuba.
     pub fn generate_ray(&self, p: Vec2) -> Ray {
         self.ray_generator().generate(p)
     }
@@ -135,47 +155,179 @@ impl Camera {
     /// for the render loop: the same rays bit for bit.
     pub fn ray_generator(&self) -> RayGenerator<'_> {
         let tan_x = (0.5 * self.fov_x_deg.to_radians()).tan();
-        RayGenerator {
-            cam: self,
-            tan_x,
-            tan_y: tan_x * self.height as f32 / self.width as f32,
-            o: self.to_world.transform_point3(Vec3::ZERO),
-        }
+        let aspect_inv = self.height as f32 / self.width as f32;
+        let (tan_x, tan_y) = match self.projection {
+            // The half extents of the film rectangle instead of slopes.
+            Projection::Orthographic => (1.0, aspect_inv),
+            _ => (tan_x, tan_x * aspect_inv),
+        };
+        RayGenerator { cam: self, tan_x, tan_y, o: self.to_world.transform_point3(Vec3::ZERO) }
     }
 
     pub fn position(&self) -> Vec3 {
         self.to_world.transform_point3(Vec3::ZERO)
+    }
+
+    /// True for a `perspective` camera, whose rays all pass through [`Self::position`].
+    pub fn is_pinhole(&self) -> bool {
+        self.projection == Projection::Pinhole
+    }
+
+    /// The Mitsuba 3 plugin name of the projection (for messages).
+    pub fn plugin_name(&self) -> &'static str {
+        match self.projection {
+            Projection::Pinhole => "perspective",
+            Projection::ThinLens { .. } => "thinlens",
+            Projection::Orthographic => "orthographic",
+        }
     }
 }
 
 /// Primary rays of a camera (see [`Camera::ray_generator`]).
 pub struct RayGenerator<'a> {
     cam: &'a Camera,
+    /// Half the film's extent at camera-space distance 1 (the slopes of its edges); for an
+    /// orthographic camera, the half extents of the film rectangle.
     tan_x: f32,
     tan_y: f32,
     o: Vec3,
 }
 
 impl RayGenerator<'_> {
+    /// The ray through film position `p` and the centre of the lens.
     #[inline]
     pub fn generate(&self, p: Vec2) -> Ray {
+        self.generate_through(p, Vec2::ZERO)
+    }
+
+    /// A camera sample's ray: through film position `p` and, for a thin lens, a lens point drawn
+    /// from `sampler` (one 2D sample, after the film position's; other cameras draw nothing, so
+    /// their sample streams are those of a pinhole).
+    #[inline]
+    pub fn sample(&self, p: Vec2, sampler: &mut Sampler) -> Ray {
+        match self.cam.projection {
+            Projection::ThinLens { aperture_radius, .. } => {
+                self.generate_through(p, aperture_radius * sample_uniform_disk_concentric(sampler.next_2d()))
+            }
+            _ => self.generate(p),
+        }
+    }
+
+    /// The ray through film position `p` and the camera-space lens point `(lens, 0)`.
+    ///
+    /// With `s = (1 - 2 p.x / W, 1 - 2 p.y / H)` the film position scaled to `[-1, 1]^2`:
+    /// - pinhole: direction `(s.x tan_x, s.y tan_y, 1)` from the origin;
+    /// - thin lens: from `(lens, 0)` towards `focus_distance (s.x tan_x, s.y tan_y, 1)`;
+    /// - orthographic: along `+z` from `(s.x, s.y / aspect, near_clip)`.
+    ///
+    /// Perspective rays start where they cross the near clip plane `z = near_clip` and end at
+    /// `z = far_clip` (camera-space depths); orthographic ones run `far_clip - near_clip` in
+    /// world units, as Mitsuba's, even when `to_world` scales `z`.
+    #[inline]
+    pub fn generate_through(&self, p: Vec2, lens: Vec2) -> Ray {
         let cam = self.cam;
         let sx = 1.0 - 2.0 * p.x / cam.width as f32;
         let sy = 1.0 - 2.0 * p.y / cam.height as f32;
         let local = Vec3::new(sx * self.tan_x, sy * self.tan_y, 1.0);
-        let inv_len = 1.0 / local.length();
-        let d_local = local * inv_len;
+        let (o, d_local) = match cam.projection {
+            Projection::Pinhole => (self.o, local * (1.0 / local.length())),
+            Projection::ThinLens { focus_distance, .. } => {
+                let from = Vec3::new(lens.x, lens.y, 0.0);
+                ((cam.to_world.transform_point3(from)), (local * focus_distance - from).normalize())
+            }
+            Projection::Orthographic => {
+                let o = cam.to_world.transform_point3(Vec3::new(local.x, local.y, cam.near_clip));
+                let d = cam.to_world.transform_vector3(Vec3::Z).normalize();
+                return Ray { o, d, t_max: cam.far_clip - cam.near_clip };
+            }
+        };
         let d = cam.to_world.transform_vector3(d_local).normalize();
         // Near/far clips are distances along the camera's z axis.
         let t_near = cam.near_clip / d_local.z;
         let t_far = cam.far_clip / d_local.z;
-        Ray { o: self.o + d * t_near, d, t_max: t_far - t_near }
+        Ray { o: o + d * t_near, d, t_max: t_far - t_near }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn camera(projection: Projection, to_world: Mat4, near_clip: f32) -> Camera {
+        Camera {
+            to_world,
+            projection,
+            fov_x_deg: 40.0,
+            near_clip,
+            far_clip: if near_clip == 1.0 { 100.0 } else { 10000.0 },
+            medium: None,
+            width: 200,
+            height: 120,
+            filter: PixelFilter::Box,
+        }
+    }
+
+    fn assert_ray(r: &Ray, o: [f32; 3], d: [f32; 3], t_max: f32) {
+        let near = |a: Vec3, b: [f32; 3]| (a - Vec3::from(b)).abs().max_element() < 2e-5;
+        assert!(near(r.o, o) && near(r.d, d), "ray {r:?}, Mitsuba o {o:?} d {d:?}");
+        assert!((r.t_max - t_max).abs() < 1e-4 * t_max, "t_max {} vs Mitsuba {t_max}", r.t_max);
+    }
+
+    /// Rays of a 200x120 film against Mitsuba 3.9.1's (`scalar_rgb`, `Sensor::sample_ray` with
+    /// the same position sample, `(x / W, y / H)`, and aperture sample).
+    #[test]
+    fn rays_match_mitsuba() {
+        let px = |u: f32, v: f32| Vec2::new(u * 200.0, v * 120.0);
+        // `orthographic`, near 1, far 100, to_world scale(1.5, 1.5, 1).
+        let ortho = camera(Projection::Orthographic, Mat4::from_scale(Vec3::new(1.5, 1.5, 1.0)), 1.0);
+        let g = ortho.ray_generator();
+        assert_ray(&g.generate(px(0.0, 0.0)), [1.5, 0.9, 1.0], [0.0, 0.0, 1.0], 99.0);
+        assert_ray(&g.generate(px(1.0, 1.0)), [-1.5, -0.9, 1.0], [0.0, 0.0, 1.0], 99.0);
+        assert_ray(&g.generate(px(0.25, 0.75)), [0.75, -0.45, 1.0], [0.0, 0.0, 1.0], 99.0);
+        // `thinlens`, fov 40, aperture_radius 0.2, focus_distance default (far_clip) or 3.
+        let lens = |focus_distance| {
+            camera(Projection::ThinLens { aperture_radius: 0.2, focus_distance }, Mat4::IDENTITY, 0.01)
+        };
+        let draw = |cam: &Camera, p: Vec2, u: Vec2| {
+            let Projection::ThinLens { aperture_radius, .. } = cam.projection else { unreachable!() };
+            cam.ray_generator().generate_through(p, aperture_radius * sample_uniform_disk_concentric(u))
+        };
+        let far = lens(10000.0);
+        let r = draw(&far, px(0.5, 0.5), Vec2::new(1.0, 0.5));
+        assert_ray(&r, [0.2, 0.0, 0.01], [-1.99702e-05, 0.0, 1.0], 9999.99);
+        let r = draw(&far, px(0.1, 0.3), Vec2::new(0.2, 0.9));
+        assert_ray(&r, [-0.0859794, 0.133909, 0.01], [0.278596, 0.0835635, 0.956766], 10451.864);
+        let r = draw(&lens(3.0), px(0.1, 0.3), Vec2::new(0.2, 0.9));
+        assert_ray(&r, [-0.0856832, 0.133465, 0.01], [0.305216, 0.0409178, 0.951403], 10510.777);
+    }
+
+    /// Every ray of a thin lens through the same film position meets at the focal plane, and
+    /// the lens points cover the aperture disk.
+    #[test]
+    fn thin_lens_rays_focus() {
+        let to_world = Mat4::from_rotation_y(0.7) * Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        let cam = camera(Projection::ThinLens { aperture_radius: 0.5, focus_distance: 4.0 }, to_world, 0.01);
+        let g = cam.ray_generator();
+        let p = Vec2::new(37.3, 81.9);
+        let pinhole = g.generate(p);
+        let to_cam = cam.to_world.inverse();
+        let at_focus = |r: &Ray| {
+            let (o, d) = (to_cam.transform_point3(r.o), to_cam.transform_vector3(r.d));
+            o + d * ((4.0 - o.z) / d.z)
+        };
+        let focus = at_focus(&pinhole);
+        let mut sampler = Sampler::from_seed(3);
+        let mut widest = 0.0f32;
+        for _ in 0..1000 {
+            let r = g.sample(p, &mut sampler);
+            assert!((at_focus(&r) - focus).length() < 1e-4, "{} vs {focus}", at_focus(&r));
+            let o = to_cam.transform_point3(r.o);
+            let lens = o - to_cam.transform_vector3(r.d) * (o.z / to_cam.transform_vector3(r.d).z);
+            assert!(lens.truncate().length() <= 0.5 + 1e-4);
+            widest = widest.max(lens.truncate().length());
+        }
+        assert!(widest > 0.48, "{widest}");
+    }
 
     /// Film positions follow the normalised filter profile: chi-square of a histogram of offsets
     /// for a pixel far from the film's edges, and offsets stay on the film at a corner.
@@ -184,6 +336,7 @@ mod tests {
         for filter in [PixelFilter::Tent { radius: 1.0 }, PixelFilter::Gaussian { stddev: 0.5 }] {
             let camera = Camera {
                 to_world: Mat4::IDENTITY,
+                projection: Projection::Pinhole,
                 fov_x_deg: 40.0,
                 near_clip: 0.01,
                 far_clip: 100.0,

@@ -104,7 +104,11 @@ pub fn emitted_power(e: &Emitter, area: Option<&AreaSampler>, sphere: BoundingSp
     let disk = PI * sphere.radius * sphere.radius;
     match e {
         Emitter::Point { intensity, .. } => 4.0 * PI * intensity.mean(),
-        Emitter::Spot { intensity, cos_cutoff, .. } => 2.0 * PI * (1.0 - cos_cutoff) * intensity.mean(),
+        Emitter::Spot { intensity, cos_cutoff, texture, .. } => {
+            // The texture's largest value keeps the bound (its mean over the cone is not at hand).
+            let tex = texture.as_ref().map_or(1.0, |t| t.range().1);
+            2.0 * PI * (1.0 - cos_cutoff) * intensity.mean() * tex
+        }
         Emitter::Area { radiance, .. } => PI * area.map_or(0.0, |a| a.area) * radiance.mean(),
         Emitter::Constant { radiance } => disk * 4.0 * PI * radiance.mean(),
         Emitter::EnvMap(map) => disk * map.radiance_integral().mean(),

@@ -113,6 +113,7 @@ impl Scene {
                 to_local,
                 cos_cutoff,
                 cos_beam,
+                texture,
             } => {
                 let pos = to_world.transform_point3(Vec3::ZERO);
                 let v = pos - p;
@@ -124,7 +125,7 @@ impl Scene {
                 (f > 0.0).then(|| EmitterSample {
                     wi,
                     dist,
-                    radiance: *intensity * (f / d2),
+                    radiance: *intensity * Emitter::spot_texture(texture, *cutoff_angle, local) * (f / d2),
                     pdf: sel,
                     is_delta: true,
                     emitter: idx as u32,
@@ -296,7 +297,16 @@ impl Scene {
                 weight: *intensity * (4.0 * haze_core::PI * sel),
                 emitter: idx as u32,
             }),
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, cos_cutoff, cos_beam, .. } => {
+            Emitter::Spot {
+                to_world,
+                intensity,
+                cutoff_angle,
+                beam_width,
+                cos_cutoff,
+                cos_beam,
+                texture,
+                ..
+            } => {
                 let cos_max = *cos_cutoff;
                 let local = sample_uniform_cone(u_dir, cos_max);
                 let f = Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, cos_max, *cos_beam, local);
@@ -305,7 +315,9 @@ impl Scene {
                     p: to_world.transform_point3(Vec3::ZERO),
                     d,
                     n: None,
-                    weight: *intensity * (f * sel / uniform_cone_pdf(cos_max)),
+                    weight: *intensity
+                        * Emitter::spot_texture(texture, *cutoff_angle, local)
+                        * (f * sel / uniform_cone_pdf(cos_max)),
                     emitter: idx as u32,
                 })
             }

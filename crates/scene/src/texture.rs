@@ -45,6 +45,23 @@ impl Texture {
         }
     }
 
+    /// The value at `uv` as one number (Mitsuba's `Texture::eval_1`): the luminance of the
+    /// RGB value ([`Rgb::luminance`], Mitsuba's weights), so a grey texture gives
+    /// its grey level.
+    pub fn eval_1(&self, uv: Vec2) -> f32 {
+        self.eval(uv).luminance()
+    }
+
+    /// The gradient of [`Self::eval_1`] with respect to `uv` (Mitsuba's `eval_1_grad`): zero
+    /// for a constant and for the piecewise constant `checkerboard` (as Mitsuba's), the
+    /// bilinear interpolant's for a bitmap ([`Bitmap::eval_1_grad`]).
+    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+        match self {
+            Texture::Constant(_) | Texture::Checkerboard { .. } => Vec2::ZERO,
+            Texture::Bitmap(b) => b.eval_1_grad(uv),
+        }
+    }
+
     /// The average over the texture's domain (Mitsuba's `Texture::mean`), used for sampling
     /// weights that must not depend on the hit.
     pub fn mean(&self) -> Rgb {

@@ -156,6 +156,23 @@ fn bsdf_of(bsdf: &str) -> Result<haze_scene::Bsdf, LoadError> {
     load_xml(&format!("{SENSOR}<shape type=\"sphere\">{bsdf}</shape>")).map(|mut s| s.shapes.remove(0).bsdf)
 }
 
+/// A conductor's `eta` and `k` given as wavelength lists are not clamped like reflectances:
+/// Mitsuba 3.9.1 (`scalar_rgb`, `mi.traverse`) gives these RGB values for them.
+#[test]
+fn conductor_spectra_are_unbounded() {
+    let Ok(haze_scene::Bsdf::Conductor(c)) = bsdf_of(
+        r#"<bsdf type="conductor"><spectrum name="eta" value="300:1.8, 400:1.65, 500:0.9, 600:0.2, 700:0.16, 800:0.18"/>
+        <spectrum name="k" value="300:1.92, 400:1.95, 500:1.95, 600:2.97, 700:3.8, 800:5.12"/></bsdf>"#,
+    ) else {
+        panic!("a conductor")
+    };
+    for (got, want) in [(c.eta, [0.0452341, 0.585709, 1.33692]), (c.k, [3.38869, 2.34904, 1.87516])] {
+        for i in 0..3 {
+            assert!((got[i] - want[i]).abs() < 2e-3 * want[i].max(0.1), "{got:?} vs Mitsuba {want:?}");
+        }
+    }
+}
+
 #[test]
 fn conductors_take_mitsuba_names_or_eta_and_k() {
     use haze_scene::bsdf::{conductor_ior, Conductor, MicrofacetType};

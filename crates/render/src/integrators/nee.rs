@@ -410,6 +410,7 @@ mod tests {
         Camera {
             filter: PixelFilter::Box,
             to_world: Mat4::IDENTITY,
+            projection: haze_scene::camera::Projection::Pinhole,
             fov_x_deg: 30.0,
             near_clip: 0.0,
             far_clip: 1e4,

@@ -99,7 +99,8 @@ impl CameraGrid {
     /// initialisation (`OnceLock`): while it waits for its rows, the thread may run another task
     /// that asks for the same grid, and would wait on itself.
     pub fn build(accel: &Accel, camera: &Camera, parallel: bool) -> Option<Self> {
-        if accel.bvh.as_ref()?.closest.nodes.len() < MIN_NODES {
+        // Only a pinhole's rays share an apex (any other ray would miss the grid anyway).
+        if !camera.is_pinhole() || accel.bvh.as_ref()?.closest.nodes.len() < MIN_NODES {
             return None;
         }
         Self::build_any(accel, camera, parallel)
@@ -345,6 +346,7 @@ mod tests {
     fn camera(to_world: Mat4, fov: f32, (width, height): (u32, u32), filter: PixelFilter) -> Camera {
         Camera {
             to_world,
+            projection: crate::camera::Projection::Pinhole,
             fov_x_deg: fov,
             near_clip: 0.05,
             far_clip: 1e4,

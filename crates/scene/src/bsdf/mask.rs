@@ -15,10 +15,9 @@ pub struct Mask {
 }
 
 impl Mask {
-    /// The opacity at `uv`: the luminance of the texture's value (Rec. 709 weights).
+    /// The opacity at `uv`: the luminance of the texture's value ([`Texture::eval_1`]).
     pub fn alpha(&self, uv: Vec2) -> f32 {
-        let c = self.opacity.eval(uv);
-        (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]).clamp(0.0, 1.0)
+        self.opacity.eval_1(uv).clamp(0.0, 1.0)
     }
 
     /// The nested BSDF with probability `alpha` (its sample, pdf times `alpha`, weight

@@ -1,6 +1,7 @@
 //! Surface scattering models: Mitsuba 3's BSDF plugins `null`, `diffuse`, `dielectric`,
 //! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic`, `twosided`, `conductor` and
-//! `roughconductor`, `mask` and `pplastic` (unpolarised), one file each,
+//! `roughconductor`, `mask`, `pplastic` (unpolarised), `blendbsdf`, and `normalmap`/`bumpmap`
+//! (`perturbed`), one file each,
 //! with the microfacet distributions they share in [`microfacet`].
 //!
 //! Local shading frame: `z` is the shading normal. `wi` points *away* from the surface towards
@@ -8,10 +9,12 @@
 //! Mitsuba and pbrt. `uv` is the surface parameterisation of the hit, for textured parameters.
 //! Values include the cosine factor only where said.
 
+mod blend;
 mod conductor;
 mod dielectric;
 mod mask;
 pub mod microfacet;
+mod perturbed;
 mod plastic;
 mod pplastic;
 mod roughdielectric;
@@ -19,10 +22,12 @@ mod roughplastic;
 mod thindielectric;
 mod twosided;
 
+pub use blend::Blend;
 pub use conductor::{conductor_ior, fresnel_conductor, Conductor, CONDUCTOR_IORS};
 pub use dielectric::fresnel_dielectric;
 pub use mask::Mask;
 pub use microfacet::{Microfacet, MicrofacetType};
+pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 pub use pplastic::PPlastic;
 pub use roughdielectric::RoughDielectric;
@@ -58,6 +63,11 @@ pub enum Bsdf {
     Mask(Box<Mask>),
     /// Mitsuba's `pplastic`, unpolarised: a specular lobe over a diffuse base, front side only.
     PPlastic(Box<PPlastic>),
+    /// `(1 - w) f_0 + w f_1` of two nested BSDFs (`blendbsdf`).
+    Blend(Box<Blend>),
+    /// The nested BSDF in a shading frame a normal or bump map perturbs (`normalmap`,
+    /// `bumpmap`); the scene perturbs the hit's shading normal, the BSDF is the nested one.
+    Perturbed(Box<Perturbed>),
 }
 
 /// A sampled outgoing direction.
@@ -95,6 +105,8 @@ impl Bsdf {
         match self {
             Bsdf::Null => true,
             Bsdf::TwoSided(b) => b.is_null(),
+            Bsdf::Blend(b) => b.nested.iter().all(Bsdf::is_null),
+            Bsdf::Perturbed(p) => p.nested.is_null(),
             _ => false,
         }
     }
@@ -106,6 +118,8 @@ impl Bsdf {
         match self {
             Bsdf::Null | Bsdf::ThinDielectric { .. } | Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.may_pass_through(),
+            Bsdf::Blend(b) => b.nested.iter().any(Bsdf::may_pass_through),
+            Bsdf::Perturbed(p) => p.nested.may_pass_through(),
             _ => false,
         }
     }
@@ -116,6 +130,8 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse { reflectance } => reflectance.is_black(),
             Bsdf::TwoSided(b) => b.is_black(),
+            Bsdf::Blend(b) => b.nested.iter().all(Bsdf::is_black),
+            Bsdf::Perturbed(p) => p.nested.is_black(),
             _ => false,
         }
     }
@@ -127,6 +143,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.distr.is_none(),
             Bsdf::Mask(m) => m.nested.is_specular(),
             Bsdf::TwoSided(b) => b.is_specular(),
+            Bsdf::Blend(b) => b.nested.iter().all(Bsdf::is_specular),
+            Bsdf::Perturbed(p) => p.nested.is_specular(),
             _ => false,
         }
     }
@@ -164,6 +182,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.sample(wi, u2, uv),
             Bsdf::Mask(m) => m.sample(wi, u1, u2, uv, with_pdf),
             Bsdf::PPlastic(b) => b.sample(wi, u1, u2, uv),
+            Bsdf::Blend(b) => b.sample(wi, u1, u2, uv, with_pdf),
+            Bsdf::Perturbed(p) => p.nested.sample_with(wi, u1, u2, uv, with_pdf),
         }
     }
 
@@ -180,6 +200,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.eval(wi, wo, uv),
             Bsdf::Mask(m) => m.eval(wi, wo, uv),
             Bsdf::PPlastic(b) => b.eval(wi, wo, uv),
+            Bsdf::Blend(b) => b.eval(wi, wo, uv),
+            Bsdf::Perturbed(p) => p.nested.eval(wi, wo, uv),
             _ => Rgb::ZERO,
         }
     }
@@ -200,6 +222,8 @@ impl Bsdf {
             // A mask passes light straight through with probability `1 - opacity`.
             Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.transmits(),
+            Bsdf::Blend(b) => b.nested.iter().any(Bsdf::transmits),
+            Bsdf::Perturbed(p) => p.nested.transmits(),
         }
     }
 
@@ -215,6 +239,8 @@ impl Bsdf {
                 | Bsdf::Conductor(_)
                 | Bsdf::PPlastic(_)
         ) || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
+            || matches!(self, Bsdf::Blend(b) if b.nested.iter().all(Bsdf::front_only))
+            || matches!(self, Bsdf::Perturbed(p) if p.nested.front_only())
     }
 
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
@@ -229,6 +255,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.pdf(wi, wo),
             Bsdf::Mask(m) => m.pdf(wi, wo, uv),
             Bsdf::PPlastic(b) => b.pdf(wi, wo),
+            Bsdf::Blend(b) => b.pdf(wi, wo, uv),
+            Bsdf::Perturbed(p) => p.nested.pdf(wi, wo, uv),
             _ => 0.0,
         }
     }
@@ -243,6 +271,8 @@ impl Bsdf {
             Bsdf::TwoSided(b) => twosided::eval_pdf(b, wi, wo, uv),
             Bsdf::Mask(m) => m.eval_pdf(wi, wo, uv),
             Bsdf::PPlastic(b) => b.eval_pdf(wi, wo, uv),
+            Bsdf::Blend(b) => b.eval_pdf(wi, wo, uv),
+            Bsdf::Perturbed(p) => p.nested.eval_pdf(wi, wo, uv),
             _ => (self.eval(wi, wo, uv), self.pdf(wi, wo, uv)),
         }
     }
@@ -255,6 +285,8 @@ impl Bsdf {
         match self {
             Bsdf::Null | Bsdf::ThinDielectric { .. } | Bsdf::Mask(_) => true,
             Bsdf::TwoSided(b) => b.transmits_null(),
+            Bsdf::Blend(b) => b.nested.iter().any(Bsdf::transmits_null),
+            Bsdf::Perturbed(p) => p.nested.transmits_null(),
             _ => false,
         }
     }
@@ -265,6 +297,8 @@ impl Bsdf {
             Bsdf::ThinDielectric { eta } => Rgb::splat(1.0 - thindielectric::reflectance(*eta, wi.z)),
             Bsdf::TwoSided(b) => b.null_transmission(twosided::front(wi), uv),
             Bsdf::Mask(m) => Rgb::splat(1.0 - m.alpha(uv)),
+            Bsdf::Blend(b) => b.null_transmission(wi, uv),
+            Bsdf::Perturbed(p) => p.nested.null_transmission(wi, uv),
             _ => Rgb::ZERO,
         }
     }

@@ -8,6 +8,7 @@ pub mod convex;
 mod mesh;
 mod primitives;
 mod sample;
+pub mod tangents;
 
 pub use mesh::TriangleMesh;
 pub use primitives::{cube_mesh, cylinder_mesh, rectangle_mesh, CYLINDER_SEGMENTS};

@@ -1,13 +1,15 @@
 //! BSDF plugins `null`, `diffuse`, `dielectric`, `thindielectric`, `roughdielectric`,
-//! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor`, `mask` and `pplastic`, and Mitsuba 3's table
+//! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor`, `mask`, `pplastic` and
+//! `blendbsdf`, `normalmap` and `bumpmap`, and Mitsuba 3's table
 //! of named indices of refraction.
 
 use super::params::Params;
 use super::{textures, LoadError};
 use crate::bsdf::{
-    conductor_ior, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, PPlastic, Plastic, RoughDielectric,
-    RoughPlastic,
+    conductor_ior, Blend, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, PPlastic, Perturbation,
+    Perturbed, Plastic, RoughDielectric, RoughPlastic,
 };
+use haze_core::color::SpectrumKind;
 use haze_core::Rgb;
 
 /// Mitsuba 3's named indices of refraction (`int_ior="water"`), at 589 nm, as listed in its
@@ -87,7 +89,7 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
             let nested = p.objects(&["bsdf"]);
             match nested.as_slice() {
                 [o] => {
-                    let inner = build(&p.nested(o.target)?)?;
+                    let inner = nested_bsdf(p, o)?;
                     if matches!(inner, Bsdf::TwoSided(_)) {
                         return Err(o.site.error("a twosided BSDF cannot wrap another twosided BSDF"));
                     }
@@ -124,11 +126,63 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
             // nested BSDF.
             let opacity = textures::texture(p, "opacity", Rgb::splat(0.5), (0.0, 1.0))?;
             let nested = match p.objects(&["bsdf"])[..] {
-                [o] => build(&p.nested(o.target)?)?,
+                [o] => nested_bsdf(p, o)?,
                 [] => return Err(p.element().error("a mask needs one nested or referenced <bsdf>")),
                 [_, o, ..] => return Err(o.site.error("a mask takes one <bsdf>")),
             };
             Bsdf::Mask(Box::new(Mask { opacity, nested: Box::new(nested) }))
+        }
+        "blendbsdf" => {
+            // Mitsuba 3: `weight` (required, although its documentation says 0.5; a float or a
+            // texture, read by luminance) and exactly two nested BSDFs, the first at weight 0.
+            if p.raw("weight").is_none() && !p.objects(&["texture"]).iter().any(|o| o.name == Some("weight"))
+            {
+                return Err(p.element().error("a blendbsdf needs 'weight' (a float or a texture in [0, 1])"));
+            }
+            let weight = textures::texture(p, "weight", Rgb::splat(0.5), (0.0, 1.0))?;
+            let nested = match p.objects(&["bsdf"])[..] {
+                [a, b] => [nested_bsdf(p, a)?, nested_bsdf(p, b)?],
+                [_, _, c, ..] => return Err(c.site.error("a blendbsdf takes two <bsdf>s, not more")),
+                _ => return Err(p.element().error("a blendbsdf needs two nested or referenced <bsdf>s")),
+            };
+            Bsdf::Blend(Box::new(Blend { weight, nested }))
+        }
+        "normalmap" | "bumpmap" => {
+            // Mitsuba 3: `normalmap` takes the texture `normalmap` (required); `bumpmap` one
+            // nested texture of any name (the height) and `scale` (1); each one nested BSDF.
+            let perturbation = if p.ty() == "normalmap" {
+                if p.raw("normalmap").is_none()
+                    && !p.objects(&["texture"]).iter().any(|o| o.name == Some("normalmap"))
+                {
+                    return Err(p
+                        .element()
+                        .error("a normalmap needs 'normalmap' (a texture, usually a raw bitmap)"));
+                }
+                Perturbation::NormalMap(textures::texture(p, "normalmap", Rgb::ZERO, (0.0, 1.0))?)
+            } else {
+                let height = match p.objects(&["texture"])[..] {
+                    [o] => textures::build(&p.nested(o.target)?)?,
+                    [] => {
+                        return Err(p.element().error("a bumpmap needs one nested or referenced <texture>"))
+                    }
+                    [_, o, ..] => return Err(o.site.error("a bumpmap takes one <texture>")),
+                };
+                let scale = p.float("scale", 1.0)?;
+                if !scale.is_finite() {
+                    return Err(p.error_at("scale", format!("'scale' must be finite, got {scale}")));
+                }
+                Perturbation::BumpMap { height, scale }
+            };
+            let nested = match p.objects(&["bsdf"])[..] {
+                [o] => nested_bsdf(p, o)?,
+                [] => {
+                    return Err(p
+                        .element()
+                        .error(format!("a {} needs one nested or referenced <bsdf>", p.ty())))
+                }
+                [_, o, ..] => return Err(o.site.error(format!("a {} takes one <bsdf>", p.ty()))),
+            };
+            Bsdf::Perturbed(Box::new(Perturbed { perturbation, nested }))
         }
         "conductor" | "roughconductor" => {
             let (eta, k) = complex_ior(p)?;
@@ -143,11 +197,30 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
         "plastic" | "roughplastic" => &["diffuse_reflectance"],
         "conductor" | "roughconductor" => &["specular_reflectance"],
         "mask" => &["opacity"],
+        "blendbsdf" => &["weight"],
+        "normalmap" => &["normalmap"],
         "pplastic" => &["diffuse_reflectance", "specular_reflectance"],
         _ => &[],
     };
-    textures::reject_other_textures(p, texture_params)?;
+    // The bump map's one texture may have any name (Mitsuba 3 takes it by kind).
+    if p.ty() != "bumpmap" {
+        textures::reject_other_textures(p, texture_params)?;
+    }
     p.finish()?;
+    Ok(bsdf)
+}
+
+/// A BSDF nested in another (`twosided`, `mask`, `blendbsdf`, `normalmap`, `bumpmap`): any
+/// but a normal or bump map, which haze applies only as a shape's own BSDF (the scene perturbs
+/// the shape's shading normal).
+fn nested_bsdf(p: &Params, o: &super::params::Object) -> Result<Bsdf, LoadError> {
+    let bsdf = build(&p.nested(o.target)?)?;
+    if matches!(bsdf, Bsdf::Perturbed(_)) {
+        return Err(o.site.error(format!(
+            "unsupported: a normalmap or bumpmap inside <bsdf type=\"{}\"> (haze applies them only as a shape's own BSDF)",
+            p.ty()
+        )));
+    }
     Ok(bsdf)
 }
 
@@ -178,13 +251,15 @@ fn unit_scale_factors(p: &Params, names: &[&str]) -> Result<(), LoadError> {
 /// default), else the named `material`'s (`Au`, `Cu`, ...; [`crate::bsdf::CONDUCTOR_IORS`]).
 fn complex_ior(p: &Params) -> Result<(Rgb, Rgb), LoadError> {
     let material = p.string_opt("material")?;
-    let eta = p.spectrum_opt("eta")?;
+    // Indices of refraction, not reflectances: a wavelength list is not clamped to [0, 1].
+    let unbounded = |name| p.spectrum_opt_as(name, SpectrumKind::Unbounded);
+    let eta = unbounded("eta")?;
     let (eta, k) = match (material, eta) {
         (Some(m), Some(_)) if m != "none" => {
             return Err(p.error_at("eta", "give either 'eta' and 'k' or 'material', not both"))
         }
         (None | Some("none"), eta) | (_, eta @ Some(_)) => {
-            (eta.unwrap_or(Rgb::ZERO), p.spectrum("k", Rgb::ONE)?)
+            (eta.unwrap_or(Rgb::ZERO), unbounded("k")?.unwrap_or(Rgb::ONE))
         }
         (Some(m), None) => conductor_ior(m).ok_or_else(|| {
             p.error_at(

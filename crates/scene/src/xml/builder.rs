@@ -93,7 +93,9 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
         }
     }
     let Some((camera, sampler, _)) = camera else {
-        return Err(doc.root.error("the scene has no <sensor> (haze needs a perspective sensor)"));
+        return Err(doc
+            .root
+            .error("the scene has no <sensor> (haze needs one: perspective, thinlens or orthographic)"));
     };
     let integrator = integrator.map(|(i, _)| i).unwrap_or_default();
     let spp = sampler.sample_count();

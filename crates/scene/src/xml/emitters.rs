@@ -13,7 +13,9 @@ use std::sync::Arc;
 /// with [`area_radiance`]). Mitsuba 3 defaults:
 /// - `point`: `position` (origin) or the translation of `to_world`; `intensity` 1 (W/sr).
 /// - `spot`: `to_world` (shines down local +z); `intensity` 1; `cutoff_angle` 20 degrees;
-///   `beam_width` 3/4 of the cutoff; both half-angles in degrees, stored in radians.
+///   `beam_width` 3/4 of the cutoff; both half-angles in degrees, stored in radians;
+///   `texture` (none; a texture or spectrum multiplying the intensity, see
+///   [`Emitter::spot_texture`]).
 /// - `constant`: `radiance` 1.
 /// - `envmap`: `filename` (required; an OpenEXR or Radiance HDR latitude-longitude image,
 ///   found through the `<path>` folders like any file), `scale` 1, `to_world` (identity; a
@@ -66,7 +68,15 @@ pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
                     format!("'beam_width' ({beam}) must lie in [0, cutoff_angle = {cutoff}] degrees"),
                 ));
             }
-            Emitter::spot(to_world, intensity, cutoff.to_radians(), beam.to_radians())
+            // Mitsuba 3's `texture` (optional): a spectrum or texture projected through the cone.
+            let textured = p.raw("texture").is_some()
+                || p.objects(&["texture"]).iter().any(|o| o.name == Some("texture"));
+            let texture = if textured {
+                Some(super::textures::texture(p, "texture", Rgb::ONE, (0.0, super::MAX_MAGNITUDE))?)
+            } else {
+                None
+            };
+            Emitter::spot(to_world, intensity, cutoff.to_radians(), beam.to_radians(), texture)
         }
         "constant" => Emitter::Constant { radiance: non_negative(p, "radiance")? },
         "envmap" => {

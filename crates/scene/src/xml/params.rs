@@ -202,6 +202,13 @@ impl<'a> Params<'a> {
             "medium" | "volume" => SpectrumKind::Unbounded,
             _ => SpectrumKind::Reflectance,
         };
+        self.spectrum_opt_as(name, kind)
+    }
+
+    /// [`Self::spectrum_opt`] converting a wavelength list as `kind`, for the parameters that
+    /// are not reflectances although their plugin is a BSDF (a conductor's `eta` and `k`, which
+    /// Mitsuba 3 does not clamp to [0, 1]).
+    pub fn spectrum_opt_as(&self, name: &str, kind: SpectrumKind) -> Result<Option<Rgb>, LoadError> {
         self.raw(name).map(|el| spectrum_value(el, name, kind)).transpose()
     }
 

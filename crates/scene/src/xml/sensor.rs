@@ -1,4 +1,4 @@
-//! `<sensor type="perspective">` with its `<film type="hdrfilm">` (and `<rfilter>`),
+//! `<sensor>` (`perspective`, `thinlens`, `orthographic`) with its `<film type="hdrfilm">` (and `<rfilter>`),
 //! `<sampler>` (Mitsuba 3's `independent`, `stratified`, `multijitter`, `orthogonal`, `ldsampler`)
 //! and optional medium.
 
@@ -8,7 +8,7 @@ use super::params::Params;
 use super::transform::uniform_scale;
 use super::values::parse_float;
 use super::LoadError;
-use crate::camera::{Camera, PixelFilter};
+use crate::camera::{Camera, PixelFilter, Projection};
 use glam::Mat4;
 use haze_core::{SamplerKind, SamplerSpec};
 
@@ -21,10 +21,16 @@ const MAX_RESOLUTION: i32 = 1 << 16;
 /// The camera and the sampler of `<sensor>` element `el` (no `<sampler>`: `independent` with
 /// Mitsuba 3's 4 samples).
 ///
-/// `perspective` parameters (Mitsuba 3 defaults): `fov` in degrees with `fov_axis` (`x`), or
-/// `focal_length` (`"50mm"`, on a 36x24 mm film, measured along the diagonal) when no `fov`
-/// is given; `near_clip` (0.01), `far_clip` (10000), `focus_distance` (`far_clip`; no effect on
-/// a pinhole), `to_world` (identity; no scaling).
+/// Every sensor (Mitsuba 3 defaults): `near_clip` (0.01), `far_clip` (10000), `focus_distance`
+/// (`far_clip`), `to_world` (identity).
+/// - `perspective`: `fov` in degrees with `fov_axis` (`x`), or `focal_length` (`"50mm"`, on a
+///   36x24 mm film, measured along the diagonal) when no `fov` is given; `to_world` must not
+///   scale; `focus_distance` has no effect on a pinhole.
+/// - `thinlens`: the same plus `aperture_radius` (required, as in Mitsuba 3; >= 0), in focus at
+///   camera-space depth `focus_distance` (> 0).
+/// - `orthographic`: no field of view: the film is the rectangle `[-1, 1] x [-1/aspect,
+///   1/aspect]` of the camera's near plane, sized by `to_world`'s scale (which must keep it
+///   non-degenerate); `focus_distance` is accepted and has no effect (as in Mitsuba 3).
 pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera, SamplerSpec), LoadError> {
     let p = b.params(el)?;
     let (width, height, filter) = match single(&p, "film")? {
@@ -39,7 +45,8 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera,
         Some(medium_el) => Some(b.medium(medium_el)?),
         None => None,
     };
-    let fov_x_deg = fov_x(&p, width as f32 / height as f32)?;
+    let orthographic = p.ty() == "orthographic";
+    let fov_x_deg = if orthographic { 0.0 } else { fov_x(&p, width as f32 / height as f32)? };
     let near_clip = p.float("near_clip", 0.01)?;
     if near_clip <= 0.0 {
         return Err(p.error_at("near_clip", format!("'near_clip' must be > 0, got {near_clip}")));
@@ -52,20 +59,52 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera,
         ));
     }
     // Mitsuba 3 reads `focus_distance` (default `far_clip`) in every projective camera and
-    // uses it only in `thinlens`: a pinhole is in focus everywhere. Read to be checked, then
-    // dropped.
-    p.float("focus_distance", far_clip)?;
+    // uses it only in `thinlens`: a pinhole is in focus everywhere.
+    let focus_distance = p.float("focus_distance", far_clip)?;
     let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
-    // As Mitsuba 3: rays would be mis-scaled (and the clip distances wrong).
-    if uniform_scale(&to_world).is_none_or(|s| (s - 1.0).abs() > 1e-3) {
+    let projection = match p.ty() {
+        "perspective" => Projection::Pinhole,
+        "thinlens" => {
+            let aperture_radius = p.float_opt("aperture_radius")?.ok_or_else(|| {
+                p.element().error("a thinlens sensor needs 'aperture_radius' (Mitsuba 3 has no default)")
+            })?;
+            if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+                return Err(p.error_at(
+                    "aperture_radius",
+                    format!("'aperture_radius' must be >= 0, got {aperture_radius}"),
+                ));
+            }
+            if !(focus_distance > 0.0 && focus_distance.is_finite()) {
+                return Err(p.error_at(
+                    "focus_distance",
+                    format!("'focus_distance' must be > 0, got {focus_distance}"),
+                ));
+            }
+            Projection::ThinLens { aperture_radius, focus_distance }
+        }
+        "orthographic" => Projection::Orthographic,
+        other => return Err(p.element().error(format!("unsupported sensor type '{other}'"))),
+    };
+    if orthographic {
+        // Scale sizes the film; a singular transform would give every ray the same origin or a
+        // zero direction.
+        let det = to_world.determinant();
+        if !(det.abs() > 1e-12 && det.is_finite()) {
+            return Err(p.error_at("to_world", "the orthographic sensor's to_world must be invertible"));
+        }
+    } else if uniform_scale(&to_world).is_none_or(|s| (s - 1.0).abs() > 1e-3) {
+        // As Mitsuba 3: rays would be mis-scaled (and the clip distances wrong).
         return Err(p.error_at(
             "to_world",
-            "the perspective sensor's to_world must not scale (rotations, mirroring and \
-             translations only)",
+            format!(
+                "the {} sensor's to_world must not scale (rotations, mirroring and translations only)",
+                p.ty()
+            ),
         ));
     }
     p.finish()?;
-    let camera = Camera { to_world, fov_x_deg, near_clip, far_clip, medium, width, height, filter };
+    let camera =
+        Camera { to_world, projection, fov_x_deg, near_clip, far_clip, medium, width, height, filter };
     Ok((camera, sampler))
 }
 
