@@ -490,7 +490,7 @@ pub const OPTIONS: &[OptionSpec] = &[
         help: "Clamp the 1/d^2 of the connections to surface points and from surface VPLs at this \
                value: fewer fireflies near corners, a biased preview (docs/theory.md 2.1).",
         applies_to: &[Vrl, Vpl],
-        conflicts_with: &[],
+        conflicts_with: &["compensated_clamp"],
         requires: None,
         scope: Scope::Method,
         example: "10",
