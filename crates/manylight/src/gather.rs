@@ -117,7 +117,7 @@ struct Walk {
     /// connections to it were clamped (`Gather::compensated_clamp`), and the chain's surface
     /// vertex `y` gathers again, as a gathering point, weighted by the part clamped off,
     /// `(1 - c |y - x|^2)+`. Kollig & Keller (2004, "Illumination in the presence of weak
-    /// singularities", §3): the surface VPLs at distance `d` estimate
+    /// singularities", Section 3): the surface VPLs at distance `d` estimate
     /// `∫ L(y -> x) f_x cos_x dω` with `dω = cos_y dA / d^2`; clamping `1/d^2` at `c` leaves
     /// `∫ L(y -> x) f_x cos_x (1 - c d^2)+ dω`, which a BSDF-sampled direction from `x`, the
     /// radiance leaving `y` estimated by a camera walk from `y`, estimates without the VPLs'

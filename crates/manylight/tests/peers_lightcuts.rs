@@ -38,11 +38,11 @@
 //! a clamped connection plus a BSDF-sampled compensation (Kollig & Keller 2004).
 //!
 //! 2026-12-05: both remedies built. (1) The distance density the heterogeneous estimators mix in
-//! follows the medium's `sigma_s T` (docs/theory.md (T34), was the majorant's exponential, which
+//! follows the medium's `sigma_s T` (docs/theory.md §12.5, (T34), was the majorant's exponential, which
 //! on this grid's one loose majorant cell put the top image rows' single scattering in a tail
 //! whose top 1% of samples held 68% of the value): 75 and 60 failing channel-pixels
 //! (hetero_sigmat, hetero_sigmat_albedo), rendered in 5.7 s instead of 8.4 s. (2)
-//! `compensated_clamp` (docs/theory.md (T12e), off by default): with `c = 1`, 39 on
+//! `compensated_clamp` (docs/theory.md §2.1, (T12e), off by default): with `c = 1`, 39 on
 //! hetero_sigmat. What fails then, by pixel and component against a 512-spp volpath render: the
 //! top three image rows (camera rays just under the cube's top face, lit through it by the
 //! sky), whose `multiple` is 5-15x below volpath's at 108 spp, and `single` 2x: light from the

@@ -1,6 +1,6 @@
 //! A distance density along a segment of a heterogeneous medium that follows the medium itself:
 //! the in-scattering integrand's `sigma_s(x) T(0, x)`, tabulated by ray marching (Kulla &
-//! Fajardo 2012, "Importance sampling techniques for path tracing in participating media", §4.2,
+//! Fajardo 2012, "Importance sampling techniques for path tracing in participating media", Section 4.2,
 //! which builds the same table for its equiangular/density product). `docs/theory.md` §12.5,
 //! (T34).
 //!
