@@ -4,8 +4,8 @@
 //! segment) and the equiangular sampling of the VPL, surface-VPL and VRL-to-point estimators
 //! depend on geometry only, never on the medium, so they stay exact (normalised densities whose
 //! pdfs the estimators divide by) in any medium. On a heterogeneous segment each distance is
-//! drawn from the one-sample mixture (T35) of that geometric density and the majorant's
-//! distance (T34), a homogeneous proxy that follows where the medium is, for variance only (the
+//! drawn from the one-sample mixture (T35) of that geometric density and the marched density
+//! (T34), a tabulated `sigma_s T` that follows where the medium is, for variance only (the
 //! estimate divides by the mixture pdf). What a heterogeneous medium changes is the
 //! integrand: `sigma_s` at the sampled points and the transmittances along the camera segment,
 //! along the VRL and on the connection, which have no closed form. Each is replaced by an
@@ -115,7 +115,7 @@ pub(crate) fn bound_factor(scene: &Scene, m: &VrlMedium, id: MediumId) -> Rgb {
 
 /// The marched density (T34) along `seg` in `h`, if it has one.
 #[inline]
-fn majorant_distance(h: Option<&Heterogeneous>, seg: &Segment) -> Option<MarchedDistance> {
+fn marched_distance(h: Option<&Heterogeneous>, seg: &Segment) -> Option<MarchedDistance> {
     h.and_then(|h| MarchedDistance::new(h, seg.o, seg.d, seg.len))
 }
 
@@ -176,7 +176,7 @@ fn camera_side(
 }
 
 /// VRL -> camera segment in a scene with heterogeneous media (T33): `v` on the VRL from the `1/h`
-/// density (T6) mixed with the VRL's majorant distance (T34) when its medium is heterogeneous,
+/// density (T6) mixed with the VRL's marched density (T34) when its medium is heterogeneous,
 /// then `u` on the camera segment towards `y_v` by [`towards`]; the estimate is (T33) with the
 /// mixture pdfs (T35).
 pub(crate) fn vrl_to_segment(
@@ -192,7 +192,7 @@ pub(crate) fn vrl_to_segment(
         return Rgb::ZERO;
     }
     let Some(on_vrl) = VrlPointSampler::new(cs.seg.o, cs.seg.d, &vrl.seg) else { return Rgb::ZERO };
-    let (v, pdf_v) = match majorant_distance(vrl_h, &vrl.seg) {
+    let (v, pdf_v) = match marched_distance(vrl_h, &vrl.seg) {
         None => on_vrl.sample_f64(u.x as f64),
         Some(m) => {
             let a = GEOMETRIC_SHARE;
@@ -210,7 +210,7 @@ pub(crate) fn vrl_to_segment(
         return Rgb::ZERO;
     }
     let y = vrl.seg.at(v as f32);
-    let maj_c = majorant_distance(cam_h, &cs.seg);
+    let maj_c = marched_distance(cam_h, &cs.seg);
     let Some((t, g)) = towards(&cs.seg, maj_c.as_ref(), y, u.y, None) else { return Rgb::ZERO };
     let pair = PointPair { u: t, v: v as f32, x: cs.seg.at(t), y, inv_w2_pdf: g / pdf_v as f32 };
     let mut s = tracker(u, vrl.seg.o);
@@ -246,7 +246,7 @@ pub(crate) fn vrl_to_point(
     if !(seg.len > 0.0 && seg.len.is_finite()) || (vrl.flux * vrl_m.sigma_s).is_black() {
         return Rgb::ZERO;
     }
-    let maj = majorant_distance(vrl_h, seg);
+    let maj = marched_distance(vrl_h, seg);
     let Some((v, g)) = towards(seg, maj.as_ref(), x, u, None) else { return Rgb::ZERO };
     let y = seg.at(v);
     let n = connection_direction(x - y, seg.d, seg.d.any_orthonormal_vector());
@@ -287,7 +287,7 @@ fn point_light_to_segment(
     if cs.seg.len.is_nan() || cs.seg.len <= 0.0 || cam_m.sigma_s.is_black() {
         return Rgb::ZERO;
     }
-    let maj_c = majorant_distance(cam_h, &cs.seg);
+    let maj_c = marched_distance(cam_h, &cs.seg);
     let Some((t, g)) = towards(&cs.seg, maj_c.as_ref(), p, u.x, clamp) else { return Rgb::ZERO };
     let x = cs.seg.at(t);
     let n = connection_direction(x - p, cs.seg.d, cs.seg.d.any_orthonormal_vector());
@@ -362,7 +362,7 @@ pub(crate) fn surface_vpl_to_segment(
 }
 
 /// A distance on the camera segment for single scattering towards the light point `p`, on
-/// `[a, b]` (the spot's interval) or, mixed with the camera medium's majorant distance (T35),
+/// `[a, b]` (the spot's interval) or, mixed with the camera medium's marched density (T34), (T35),
 /// anywhere on the segment; with its pdf. `None` if none exists.
 pub(crate) fn single_distance(
     h: &Heterogeneous,

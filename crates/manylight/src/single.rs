@@ -111,7 +111,7 @@ const UNIFORM_SHARE: f32 = 0.2;
 /// `directional`, `docs/theory.md` §13): no point to aim at, so the distance `u` is drawn
 /// first, from the mixture of the uniform density on `[0, s]` (share [`UNIFORM_SHARE`]) and the
 /// density of the first collision, truncated to the segment (the exponential of the mean
-/// `sigma_t`, or in a heterogeneous medium the majorant's, T34), which follows `T_c(u)`; then a
+/// `sigma_t`, or in a heterogeneous medium the marched density, T34), which follows `T_c(u)`; then a
 /// direction `w` towards the light as next-event estimation draws it
 /// ([`Scene::sample_direction_of`]: the sun's one direction, the envmap's table, the uniform
 /// sphere), and
@@ -136,10 +136,10 @@ fn from_infinity(
     // The collision density: `(sample, pdf)` closures over the truncated exponential or the
     // marched density (T34), or none (a thin segment: uniform alone).
     let sigma = med.sigma_t.mean();
-    let majorant = hetero.and_then(|h| MarchedDistance::new(h, cs.seg.o, cs.seg.d, len));
+    let marched = hetero.and_then(|h| MarchedDistance::new(h, cs.seg.o, cs.seg.d, len));
     let exponential = hetero.is_none() && sigma * len > 1e-4 && sigma.is_finite();
     let collision_pdf = |u: f32| -> f32 {
-        if let Some(m) = &majorant {
+        if let Some(m) = &marched {
             m.pdf(u)
         } else if exponential {
             sigma * (-sigma * u).exp() / -(-sigma * len).exp_m1()
@@ -151,7 +151,7 @@ fn from_infinity(
         (u_dist / UNIFORM_SHARE) * len
     } else {
         let v = (u_dist - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE);
-        if let Some(m) = &majorant {
+        if let Some(m) = &marched {
             m.sample(v)
         } else if exponential {
             // Inversion of the truncated exponential: `-ln(1 - v (1 - e^{-sigma s})) / sigma`.
