@@ -194,6 +194,7 @@ class Scene:
         bound: str | None = None,
         builder: str | None = None,
         sampler: str | None = None,
+        compensated_clamp: float | None = None,
     ) -> np.ndarray:
         """Per pixel, a float32 array of shape (H, W), what ``haze render --cut-image`` draws:
         the mean cut size (``cut="bound"``) or the largest cut node's share of the stochastic
