@@ -44,6 +44,10 @@ pub struct EmitterTables {
     /// The sphere through which light from infinity enters ([`BoundingSphere::around`] the
     /// scene's geometry).
     pub sphere: BoundingSphere,
+    /// The sphere around the scattering media that light paths from infinity also aim at,
+    /// when they are bounded and small against `sphere` ([`crate::media_bounds::media_sphere`],
+    /// `docs/theory.md` §13, (T38b)).
+    pub media: Option<BoundingSphere>,
     /// Probability that a light path starts at each emitter: proportional to its emitted power
     /// ([`emitted_power`]), so that every light path carries about the same flux whatever the
     /// mix of emitters (a bright sun and a dim sky, a lamp and a large sky); cumulative in
@@ -79,7 +83,7 @@ impl EmitterTables {
                 acc as f32
             })
             .collect();
-        EmitterTables { area, has_envmap, sphere, emission_pmf, emission_cdf }
+        EmitterTables { area, has_envmap, sphere, media: None, emission_pmf, emission_cdf }
     }
 
     /// The emitter that `u` chooses for a light path, and the probability of that choice.

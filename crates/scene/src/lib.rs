@@ -16,6 +16,7 @@ pub mod hetero;
 pub mod interaction;
 pub mod lights;
 pub mod marched;
+pub mod media_bounds;
 pub mod medium;
 pub mod scene;
 pub mod shape;

@@ -6,6 +6,7 @@
 //! reference point.
 
 use crate::emitter::Emitter;
+use crate::emitter_tables::BoundingSphere;
 use crate::medium::MediumId;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
@@ -353,6 +354,16 @@ impl Scene {
     ///   weight = L(w) pi r^2 / p(w)        (directional: E pi r^2)
     /// ```
     ///
+    /// When the scattering media lie in a small sphere `(c_m, r_m)` of their own
+    /// ([`Scene::media_sphere`]), the origin comes instead from the mixture of the two disks,
+    /// share [`MEDIA_SHARE`] from the media's (its point moved along `d` onto the scene disk's
+    /// plane), and the position pdf is the mixture's at the origin (T38b):
+    ///
+    /// ```text
+    ///   p(x) = (1 - s) [|x - c|_perp <= r] / (pi r^2) + s [|x - c_m|_perp <= r_m] / (pi r_m^2)
+    ///   weight = L(w) / (p(w) p(x))
+    /// ```
+    ///
     /// Returns `(origin, d, weight)`; `None` for other emitters or a black sample. The origin
     /// lies outside the sphere, so the path enters the scene from outside.
     ///
@@ -382,10 +393,24 @@ impl Scene {
         }
         let sphere = self.emitter_tables.sphere;
         let r = sphere.radius;
-        let q = haze_core::sampling::sample_uniform_disk_concentric(u_pos);
         let frame = haze_core::Frame::from_normal(d);
-        let origin = sphere.center + r * (frame.to_world(Vec3::new(q.x, q.y, 0.0)) - d);
-        Some((origin, d, le_over_pdf * (haze_core::PI * r * r)))
+        let Some(media) = self.emitter_tables.media else {
+            let q = haze_core::sampling::sample_uniform_disk_concentric(u_pos);
+            let origin = sphere.center + r * (frame.to_world(Vec3::new(q.x, q.y, 0.0)) - d);
+            return Some((origin, d, le_over_pdf * (haze_core::PI * r * r)));
+        };
+        // The disk chosen by `u_pos.x`, rescaled to stay uniform.
+        let (disk, u) = if u_pos.x < MEDIA_SHARE {
+            (media, Vec2::new(u_pos.x / MEDIA_SHARE, u_pos.y))
+        } else {
+            (sphere, Vec2::new((u_pos.x - MEDIA_SHARE) / (1.0 - MEDIA_SHARE), u_pos.y))
+        };
+        let q = haze_core::sampling::sample_uniform_disk_concentric(u);
+        let p = disk.center + disk.radius * frame.to_world(Vec3::new(q.x, q.y, 0.0));
+        // Onto the plane tangent to the scene's sphere upstream, `(x - c) . d = -r`.
+        let origin = p - d * ((p - sphere.center).dot(d) + r);
+        let pdf = infinite_origin_pdf(origin, d, sphere, media);
+        (pdf > 0.0).then(|| (origin, d, le_over_pdf * (1.0 / pdf)))
     }
 
     /// Medium containing the point `p`, found by casting a ray and looking at the first shape
@@ -417,4 +442,26 @@ impl Scene {
         let table = self.emitter_tables.area[emitter].as_ref()?;
         Some(table.sample(&self.shapes[*shape as usize], u))
     }
+}
+
+/// Share of the light paths from infinity whose origin is aimed at the media's sphere when there
+/// is one (`docs/theory.md` §13, (T38b)): half, so that the scene's surfaces keep half their
+/// surface VPLs while the media get at least 2.5 times their density of VRLs.
+pub const MEDIA_SHARE: f32 = 0.5;
+
+/// The density per unit area, on the plane perpendicular to `d`, of the origin `x` of a light
+/// path from infinity drawn from the mixture of the scene's disk and the media's (T38b).
+pub fn infinite_origin_pdf(x: Vec3, d: Vec3, scene: BoundingSphere, media: BoundingSphere) -> f32 {
+    let across = |c: Vec3| {
+        let v = x - c;
+        (v - d * v.dot(d)).length_squared()
+    };
+    let disk = |s: BoundingSphere, share: f32| {
+        if across(s.center) <= s.radius * s.radius * (1.0 + 1e-5) {
+            share / (haze_core::PI * s.radius * s.radius)
+        } else {
+            0.0
+        }
+    };
+    disk(scene, 1.0 - MEDIA_SHARE) + disk(media, MEDIA_SHARE)
 }

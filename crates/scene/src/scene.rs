@@ -178,7 +178,10 @@ impl Scene {
     ) -> Self {
         let accel = Accel::build(&shapes);
         let (lo, hi) = accel.bounds();
-        let emitter_tables = EmitterTables::new(&emitters, &shapes, BoundingSphere::around(lo, hi));
+        let sphere = BoundingSphere::around(lo, hi);
+        let mut emitter_tables = EmitterTables::new(&emitters, &shapes, sphere);
+        emitter_tables.media =
+            crate::media_bounds::media_sphere(&shapes, &media, camera.medium, (lo, hi), sphere);
         let every_surface_blocks = shapes.iter().all(Shape::blocks_shadow_rays);
         let every_emitter_at_infinity = emitters.iter().all(Emitter::is_infinite);
         let every_emitter_delta = emitters.iter().all(Emitter::is_delta);
@@ -363,6 +366,12 @@ impl Scene {
     /// ([`BoundingSphere::around`] [`Self::bounds`]).
     pub fn bounding_sphere(&self) -> BoundingSphere {
         self.emitter_tables.sphere
+    }
+
+    /// The sphere around the scattering media that light paths from infinity also aim at
+    /// (`docs/theory.md` §13, (T38b)), if any.
+    pub fn media_sphere(&self) -> Option<BoundingSphere> {
+        self.emitter_tables.media
     }
 
     /// Axis-aligned bounds of all finite geometry.

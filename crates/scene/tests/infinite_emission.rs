@@ -74,6 +74,7 @@ fn flux_on_target(
     n: usize,
     seed: u64,
     mut sample: impl FnMut(Vec2, Vec2, f32) -> Option<(Vec3, Vec3, Rgb)>,
+    target: (Vec3, f32),
 ) -> [(f64, f64); 3] {
     let mut s = Sampler::from_seed(seed);
     let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
@@ -81,7 +82,7 @@ fn flux_on_target(
         let (u_sel, u_pos, u_dir) = (s.next_1d(), s.next_2d(), s.next_2d());
         let Some((o, d, w)) = sample(u_pos, u_dir, u_sel) else { continue };
         assert!(w.is_finite() && w.min_component() >= 0.0, "weight {w:?}");
-        if intersect_sphere(&Ray::new(o, d), TARGET.0, TARGET.1).is_some() {
+        if intersect_sphere(&Ray::new(o, d), target.0, target.1).is_some() {
             for c in 0..3 {
                 sum[c] += w[c] as f64;
                 sum2[c] += (w[c] as f64).powi(2);
@@ -119,25 +120,37 @@ fn light_paths_from_infinity_deliver_the_analytic_flux() {
     ];
     let n = 300_000;
     for (k, want) in want.iter().enumerate() {
-        let got =
-            flux_on_target(n, 7 + k as u64, |u_pos, u_dir, _| sc.sample_infinite_emission(k, u_pos, u_dir));
+        let got = flux_on_target(
+            n,
+            7 + k as u64,
+            |u_pos, u_dir, _| sc.sample_infinite_emission(k, u_pos, u_dir),
+            TARGET,
+        );
         let z = z_scores(got, *want);
         assert!(z.iter().all(|z| z.abs() < 4.5), "emitter {k}: {got:?} vs {want:?} (z {z:?})");
         // Control: the same test rejects a flux 10% off.
-        let off = flux_on_target(n, 7 + k as u64, |u_pos, u_dir, _| {
-            sc.sample_infinite_emission(k, u_pos, u_dir).map(|(o, d, w)| (o, d, w * 1.1))
-        });
+        let off = flux_on_target(
+            n,
+            7 + k as u64,
+            |u_pos, u_dir, _| sc.sample_infinite_emission(k, u_pos, u_dir).map(|(o, d, w)| (o, d, w * 1.1)),
+            TARGET,
+        );
         let z = z_scores(off, *want);
         assert!(z.iter().any(|z| z.abs() > 4.5), "emitter {k}: a 10% error passes (z {z:?})");
     }
     // All three through the light paths' power-weighted choice.
     let total: [f64; 3] = std::array::from_fn(|c| want.iter().map(|w| w[c]).sum());
-    let got = flux_on_target(3 * n, 99, |u_pos, u_dir, u_sel| {
-        sc.sample_emission(u_sel, u_pos, u_dir).map(|e| {
-            assert!(e.n.is_none());
-            (e.p, e.d, e.weight)
-        })
-    });
+    let got = flux_on_target(
+        3 * n,
+        99,
+        |u_pos, u_dir, u_sel| {
+            sc.sample_emission(u_sel, u_pos, u_dir).map(|e| {
+                assert!(e.n.is_none());
+                (e.p, e.d, e.weight)
+            })
+        },
+        TARGET,
+    );
     let z = z_scores(got, total);
     assert!(z.iter().all(|z| z.abs() < 4.5), "{got:?} vs {total:?} (z {z:?})");
 }
@@ -166,4 +179,90 @@ fn origins_lie_outside_the_scene_on_the_covering_disk() {
         rim += (across > 0.95 * sphere.radius) as u32;
     }
     assert!(rim > 1000, "the disk's rim is drawn ({rim})");
+}
+
+/// The light paths from infinity aimed at a small medium (T38b): a fog sphere of radius 0.5 in
+/// a scene whose bounding sphere is about ten times wider. The mixture of the two disks delivers
+/// the analytic flux onto the fog sphere and onto a sphere elsewhere (which only the scene's
+/// disk reaches), its origins lie upstream outside the scene, a flux 10% off fails the same
+/// test on the fog (control), and the fog sphere receives more than 2.5 times the paths of the plain disk.
+#[test]
+fn light_paths_from_infinity_aim_at_small_media() {
+    use haze_scene::{Emitter, Shape};
+    let fog = (Vec3::new(1.0, -0.5, 0.3), 0.5f32);
+    let other = (Vec3::new(-3.0, 1.0, -2.0), 0.8f32);
+    let xml = r#"<scene version="3.0.0">
+        <sensor type="perspective"/>
+        <medium type="homogeneous" id="fog"><rgb name="sigma_t" value="1"/><rgb name="albedo" value="0.8"/></medium>
+        <shape type="sphere"><point name="center" x="1" y="-0.5" z="0.3"/><float name="radius" value="0.5"/>
+            <bsdf type="null"/><ref name="interior" id="fog"/></shape>
+        <shape type="sphere"><point name="center" x="-3" y="1" z="-2"/><float name="radius" value="0.8"/></shape>
+        <shape type="sphere"><point name="center" x="6" y="4" z="5"/><float name="radius" value="0.5"/></shape>
+    </scene>"#;
+    let s = load_str(xml, Path::new("fog.xml"), Path::new("."), &LoadOptions::default()).unwrap();
+    let sun = Rgb::new(2.0, 1.5, 0.8);
+    let sun_d = Vec3::new(0.3, -1.0, 0.2).normalize();
+    let build = |shapes: Vec<Shape>, emitters| {
+        Scene::new(None, s.camera.clone(), 1, IntegratorSpec::default(), shapes, s.media.clone(), emitters)
+    };
+    let map = envmap();
+    let integral = envmap_integral(&map);
+    let sc = build(
+        s.shapes.clone(),
+        vec![Emitter::Directional { d: sun_d, irradiance: sun }, Emitter::EnvMap(Arc::new(map))],
+    );
+    let media = sc.media_sphere().expect("the fog is small against the scene");
+    let sphere = sc.bounding_sphere();
+    assert!(
+        (media.center - fog.0).length() < 1e-4 && media.radius < 0.9 && media.radius >= fog.1 * 3f32.sqrt()
+    );
+    // Flux onto `target` from `emitter` (mean and standard error per channel) and the paths that hit it.
+    let flux = |sc: &Scene, target: (Vec3, f32), factor: f32, emitter: usize, seed: u64| {
+        let mut hit = 0u32;
+        let got = flux_on_target(
+            300_000,
+            seed,
+            |u_pos, u_dir, _| {
+                let (o, d, w) = sc.sample_infinite_emission(emitter, u_pos, u_dir)?;
+                assert!(
+                    (o - sphere.center).length() >= sphere.radius * (1.0 - 1e-5),
+                    "origin inside the scene"
+                );
+                assert!((o - sphere.center).dot(d) < 0.0, "origin downstream");
+                let hits = intersect_sphere(&Ray::new(o, d), target.0, target.1).is_some();
+                hit += hits as u32;
+                Some((o, d, w * factor))
+            },
+            target,
+        );
+        (got, hit)
+    };
+    for target in [fog, other] {
+        let cross = PI as f64 * (target.1 as f64).powi(2);
+        for emitter in 0..2 {
+            let want: [f64; 3] =
+                std::array::from_fn(|c| cross * if emitter == 0 { sun[c] as f64 } else { integral[c] });
+            let (got, _) = flux(&sc, target, 1.0, emitter, 11 + emitter as u64);
+            let z = z_scores(got, want);
+            assert!(
+                z.iter().all(|z| z.abs() < 4.5),
+                "emitter {emitter}, {target:?}: {got:?} vs {want:?} (z {z:?})"
+            );
+            // Control, where the test has the power (most of the aimed paths hit the fog).
+            if target == fog {
+                let (off, _) = flux(&sc, target, 1.1, emitter, 11 + emitter as u64);
+                let z = z_scores(off, want);
+                assert!(z.iter().any(|z| z.abs() > 4.5), "emitter {emitter}: a 10% error passes (z {z:?})");
+            }
+        }
+    }
+    // The same scene without the fog's medium draws from the scene's disk alone.
+    let plain = build(
+        s.shapes.iter().map(|sh| Shape { interior: None, ..sh.clone() }).collect(),
+        vec![Emitter::Directional { d: sun_d, irradiance: sun }],
+    );
+    assert!(plain.media_sphere().is_none());
+    let (_, plain_hits) = flux(&plain, fog, 1.0, 0, 5);
+    let (_, aimed_hits) = flux(&sc, fog, 1.0, 0, 5);
+    assert!(aimed_hits as f32 > 2.5 * plain_hits as f32, "aimed {aimed_hits} vs plain {plain_hits}");
 }
