@@ -1,7 +1,8 @@
 //! The camera side of the whole image (`docs/theory.md` §2.1): camera chains through null
-//! boundaries and delta surfaces, gathering on every medium segment they cross and at their
-//! first non-delta surface vertex, and the continuation from one gathering vertex through
-//! delta chains (caustics into gathering vertices).
+//! boundaries, delta surfaces and rough interfaces (next-event estimation there, then a BSDF
+//! sample), gathering on every medium segment they cross and at their first other non-delta
+//! surface vertex, and the continuation from one gathering vertex through delta chains
+//! (caustics into gathering vertices).
 //!
 //! The path-space table of docs/theory.md §2.1 says which connection makes which path; this file makes the
 //! camera half of each row: emitters hit by a gathering chain (counted fully), next-event
@@ -123,6 +124,9 @@ struct Walk {
     /// radiance leaving `y` estimated by a camera walk from `y`, estimates without the VPLs'
     /// singularity.
     compensate_from: Option<Vec3>,
+    /// The chain passed a rough interface (`Bsdf::is_rough_interface`) and no delta vertex
+    /// since: next-event estimation there counted the emitters this chain could hit.
+    after_rough: bool,
 }
 
 /// How a chain ended.
@@ -160,6 +164,7 @@ pub(crate) fn whole_path_radiance(
         skip_area_emitters: false,
         may_split: gather.split(),
         compensate_from: None,
+        after_rough: false,
     };
     CHAIN.with_borrow_mut(|chain| {
         chain.clear();
@@ -183,9 +188,10 @@ fn walk(
     // The most events a path may have (`max_depth - 1`, crate::depth).
     let max_light_path = crate::depth::max_events(scene);
     loop {
-        let end = walk_chain(scene, &mut st, max_events, sampler, chain, out);
+        let end = walk_chain(scene, &mut st, max_events, max_light_path, gather, sampler, chain, out);
         let seen_directly = std::mem::replace(&mut st.direct, false);
         st.skip_area_emitters = false;
+        st.after_rough = false;
         st.may_split = None;
         for ChainSegment { cs, after_surface, .. } in chain.iter().filter(|c| !c.gathered) {
             // Next-event estimation on the segment makes paths of `c + 1` events (crate::depth).
@@ -348,6 +354,7 @@ fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample
         gathering: st.gathering || !bs.null,
         direct: st.direct && bs.null,
         compensate_from: st.compensate_from.filter(|_| bs.null),
+        after_rough: st.after_rough && bs.null,
         ..*st
     }
 }
@@ -357,10 +364,13 @@ fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample
 /// not under `skip_area_emitters`); a delta surface sample that is not `null` (straight through
 /// a thin sheet) turns gathering on and `direct` off. Under `may_split` the first delta vertex
 /// with two lobes ends the chain with both (`ChainEnd::Split`).
+#[allow(clippy::too_many_arguments)]
 fn walk_chain(
     scene: &Scene,
     st: &mut Walk,
     max_events: u32,
+    max_light_path: u32,
+    gather: &impl Gather,
     sampler: &mut Sampler,
     chain: &mut Vec<ChainSegment>,
     out: &mut PathRadiance,
@@ -403,12 +413,12 @@ fn walk_chain(
         }
         let emitted = if st.surface_seen { Component::Surface } else { Component::Emitted };
         let Some(h) = hit else {
-            if st.gathering {
+            if st.gathering && !st.after_rough {
                 out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
             }
             return ChainEnd::Stop;
         };
-        if st.gathering && !st.skip_area_emitters {
+        if st.gathering && !st.skip_area_emitters && !st.after_rough {
             if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
                 out.add(emitted, st.beta * le);
             }
@@ -421,7 +431,41 @@ fn walk_chain(
             return ChainEnd::Stop;
         }
         if !shape.bsdf.is_specular() {
-            return ChainEnd::Surface(h);
+            if !(st.gathering && shape.bsdf.is_rough_interface()) {
+                return ChainEnd::Surface(h);
+            }
+            // A rough interface in a gathering chain (docs/theory.md §2.1, "Rough interfaces"):
+            // direct light by next-event estimation (the only strategy for it: the emitters this
+            // chain hits before its next delta vertex are left out, `after_rough`), then a BSDF
+            // sample, and the chain goes on gathering beyond. The paths a virtual light would
+            // make by a connection to this point are those the gathering beyond makes.
+            let frame = Frame::from_normal(h.ns);
+            let wi = frame.to_local(-st.ray.d);
+            if st.events < max_light_path {
+                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, SurfaceMis::None);
+                out.add(Component::Surface, st.beta * nee);
+            }
+            if st.events + 1 >= max_events {
+                return ChainEnd::Stop;
+            }
+            let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
+            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else {
+                return ChainEnd::Stop;
+            };
+            // Seen directly, its light through delta chains is the caustic paths' (`splat.rs`).
+            let skip_area_emitters = st.direct && gather.splats_caustics();
+            *st = after_delta(st, &h, &frame, &bs, scene);
+            st.skip_area_emitters = skip_area_emitters;
+            st.after_rough = true;
+            st.direct = false;
+            if st.events > RR_EVENTS {
+                let q = st.beta.max_component().min(0.95);
+                if sampler.next_1d() >= q {
+                    return ChainEnd::Stop;
+                }
+                st.beta /= q;
+            }
+            continue;
         }
         // A delta vertex is an event unless its sample is `null` (a thin sheet's straight
         // transmission, as volpath counts it): `after_delta` counts it; the walk ends where no

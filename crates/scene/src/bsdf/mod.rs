@@ -124,6 +124,21 @@ impl Bsdf {
         }
     }
 
+    /// True for a rough interface that the many-light methods' camera walk passes through (next
+    /// event estimation there, a BSDF sample, gathering beyond) instead of gathering at it
+    /// (`docs/theory.md` §2.1, "Rough interfaces"): a connection from a virtual light to a point
+    /// of rough glass goes through a refraction lobe on the receiver's side and, for surface
+    /// VPLs on the glass, on the light's side too, so most camera samples get nothing from a
+    /// pass's few lights in the lobes and a rare one gets much (Mitsuba 3's
+    /// `test_homo_roughdielectric_spot`: 58% of the spheres' pixels had all samples equal).
+    pub fn is_rough_interface(&self) -> bool {
+        match self {
+            Bsdf::RoughDielectric(_) => true,
+            Bsdf::Perturbed(p) => p.nested.is_rough_interface(),
+            _ => false,
+        }
+    }
+
     /// True when the BSDF has no effect on light at all besides absorbing it
     /// (a black diffuse surface): paths end there.
     pub fn is_black(&self) -> bool {
