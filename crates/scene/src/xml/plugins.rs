@@ -50,7 +50,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("sampler", "multijitter", &["sample_count", "seed", "jitter"]),
     ("sampler", "orthogonal", &["sample_count", "seed", "jitter", "strength"]),
     ("sampler", "ldsampler", &["sample_count", "seed"]),
-    ("film", "hdrfilm", &["width", "height", "pixel_format", "component_format", "file_format"]),
+    ("film", "hdrfilm", &["width", "height", "pixel_format", "component_format", "file_format", "banner"]),
     ("rfilter", "box", &[]),
     ("rfilter", "tent", &["radius"]),
     ("rfilter", "gaussian", &["stddev"]),
@@ -74,6 +74,8 @@ const PLUGINS: &[PluginEntry] = &[
         &[
             "distribution",
             "alpha",
+            "alpha_u",
+            "alpha_v",
             "sample_visible",
             "int_ior",
             "ext_ior",
