@@ -194,6 +194,7 @@ fn integrators_and_sensor_options() {
                 <integer name="width" value="200"/><integer name="height" value="100"/>
                 <string name="pixel_format" value="rgba"/>
                 <string name="component_format" value="float16"/>
+                <boolean name="banner" value="false"/>
                 <rfilter type="box"/>
             </film>
             <sampler type="independent">
@@ -208,6 +209,18 @@ fn integrators_and_sensor_options() {
     let x = 2.0 * ((15f32).to_radians().tan() * 2.0).atan().to_degrees();
     assert!((s.camera.fov_x_deg - x).abs() < 1e-3);
     assert_eq!((s.camera.near_clip, s.camera.far_clip), (0.5, 50.0));
+}
+
+/// `banner` (Mitsuba 0.x) is read and ignored, as Mitsuba 3's hdrfilm does; it must still be
+/// a boolean.
+#[test]
+fn film_banner_is_a_boolean_and_ignored() {
+    let with = |v: &str| format!(r#"<sensor type="perspective"><film type="hdrfilm">{v}</film></sensor>"#);
+    let s = load(&with(r#"<boolean name="banner" value="true"/>"#));
+    assert_eq!((s.camera.width, s.camera.height), (768, 576));
+    let e = expect_error(load_with(&with(r#"<string name="banner" value="yes"/>"#), &LoadOptions::default()));
+    assert!(e.message.contains("wrong type for parameter 'banner': expected <boolean>"), "{e}");
+    assert_eq!(e.line, 2, "{e}");
 }
 
 #[test]
