@@ -10,6 +10,7 @@
 use haze_render::image_io::RgbImage;
 use haze_render::progressive::{render_volpath, RenderSettings};
 use haze_scene::bsdf::{Bsdf, Microfacet, Roughness};
+use haze_scene::emitter::Emitter;
 use haze_scene::{load_file, LoadOptions, Scene};
 use haze_testkit::data::repo_root;
 use haze_testkit::ztest::{pool_variance, z_test, ZTestReport};
@@ -75,4 +76,17 @@ fn textured_roughness_matches_mitsuba() {
     std::mem::swap(alpha_u, alpha_v);
     let r = compare(&scene, "textured-roughness");
     assert!(!r.passed(0.005, 5.0), "swapped roughness textures went unnoticed: {r}");
+}
+
+/// Mitsuba 3's `projector`: a checkerboard image (not symmetric) cast onto a floor and a wall,
+/// by next-event estimation. Control: the image mirrored top to bottom.
+#[test]
+fn projector_matches_mitsuba() {
+    let mut scene = load("projector");
+    let r = compare(&scene, "projector");
+    assert!(r.passed(0.005, 5.0), "does not match Mitsuba 3: {r}");
+    let Emitter::Projector(p) = &mut scene.emitters[0] else { panic!("a projector") };
+    p.tan_y = -p.tan_y;
+    let r = compare(&scene, "projector");
+    assert!(!r.passed(0.005, 5.0), "the mirrored image went unnoticed: {r}");
 }

@@ -17,6 +17,7 @@ pub mod interaction;
 pub mod lights;
 pub mod marched;
 pub mod medium;
+pub mod projector;
 pub mod scene;
 pub mod shape;
 pub mod texture;

@@ -133,6 +133,7 @@ fn sealed_shapes(shapes: &[Shape], emitters: &[Emitter]) -> Vec<f32> {
         match e {
             Emitter::Point { position, .. } => points.push(*position),
             Emitter::Spot { to_world, .. } => points.push(to_world.transform_point3(Vec3::ZERO)),
+            Emitter::Projector(p) => points.push(p.position()),
             Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => {}
             Emitter::Area { .. } => return vec![0.0; shapes.len()],
         }

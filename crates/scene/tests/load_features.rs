@@ -353,3 +353,29 @@ fn sources_list_every_file_read() {
     assert_eq!(s.shapes.len(), 2);
     assert_eq!(files, vec![main.clone(), dir.join("parts/camera.xml"), dir.join("parts/quad.obj")]);
 }
+
+/// `projector` (Mitsuba 3's names and defaults) and its errors, each naming the parameter.
+#[test]
+fn projector_parameters_and_errors() {
+    use haze_scene::emitter::Emitter;
+    let with =
+        |body: &str| format!("<sensor type=\"perspective\"/>\n<emitter type=\"projector\">{body}</emitter>");
+    let s = load(&with(r#"<float name="fov" value="90"/><float name="scale" value="2"/>"#));
+    let Emitter::Projector(p) = &s.emitters[0] else { panic!("a projector") };
+    assert!((p.tan_x - 1.0).abs() < 1e-6 && (p.tan_y - 1.0).abs() < 1e-6 && p.scale == 2.0);
+    assert_eq!(p.irradiance, Rgb::ONE.into());
+    for (body, want) in [
+        (r#"<float name="scale" value="-1"/>"#, "'scale' must be >= 0, got -1"),
+        (r#"<float name="fov" value="180"/>"#, "'fov' must be in (0, 180) degrees"),
+        (r#"<rgb name="irradiance" value="-1"/>"#, "'irradiance' must lie in [0,"),
+        (
+            r#"<transform name="to_world"><scale value="0"/></transform>"#,
+            "the projector's to_world is singular",
+        ),
+        (r#"<float name="cutoff_angle" value="20"/>"#, "unused parameter 'cutoff_angle'"),
+    ] {
+        let e = expect_error(load_with(&with(body), &LoadOptions::default()));
+        assert!(e.message.contains(want), "{body}: {e}");
+        assert_eq!(e.line, 3, "{body}: {e}");
+    }
+}

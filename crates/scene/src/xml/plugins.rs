@@ -149,6 +149,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("phase", "hg", &["g"]),
     ("emitter", "point", &["position", "intensity", "to_world"]),
     ("emitter", "spot", &["to_world", "intensity", "cutoff_angle", "beam_width", "texture"]),
+    ("emitter", "projector", &["irradiance", "scale", "to_world", "fov", "fov_axis", "focal_length"]),
     ("emitter", "area", &["radiance"]),
     ("emitter", "constant", &["radiance"]),
     ("emitter", "envmap", &["filename", "scale", "to_world"]),

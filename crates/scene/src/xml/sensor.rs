@@ -168,7 +168,10 @@ pub(super) fn diagonal_fov_of_focal_length(f_mm: f32) -> f32 {
     2.0 * ((36.0f32 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * f_mm)).atan().to_degrees()
 }
 
-fn fov_x(p: &Params, aspect: f32) -> Result<f32, LoadError> {
+/// The horizontal field of view in degrees from `fov` (with `fov_axis`) or `focal_length`
+/// (`"50mm"` by default), for an image of the given aspect ratio (width over height): the
+/// perspective camera's and the projector's (Mitsuba 3's `parse_fov`).
+pub(super) fn fov_x(p: &Params, aspect: f32) -> Result<f32, LoadError> {
     let fov = p.float_opt("fov")?;
     let focal = p.string_opt("focal_length")?;
     if fov.is_some() && focal.is_some() {
