@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 /// Orthonormal basis `(s, t, n)`; local `z` is `n`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
     pub s: Vec3,
     pub t: Vec3,

@@ -109,6 +109,11 @@ impl Method {
         if kind != MethodKind::VolPath && scene.emitters.iter().any(|e| e.is_textured_spot()) {
             bail!("integrator '{kind}' does not support spot lights with a 'texture' (render with volpath)");
         }
+        if kind != MethodKind::VolPath
+            && scene.emitters.iter().any(|e| matches!(e, haze_scene::emitter::Emitter::Projector(_)))
+        {
+            bail!("integrator '{kind}' does not support projector emitters (render with volpath)");
+        }
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {

@@ -62,3 +62,20 @@ fn many_light_methods_refuse_textured_spots() {
     let options = resolve(MethodKind::VolPath, &[], Spelling::Flag).unwrap();
     assert!(Method::build(&scene, MethodKind::VolPath, &options.method, 1).is_ok());
 }
+
+/// A `projector` renders with volpath only, like a textured spot: the many-light methods
+/// refuse it by name, every one of them.
+#[test]
+fn many_light_methods_refuse_projectors() {
+    use haze_engine::methods::Method;
+    let xml = r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+        <emitter type="projector"><float name="fov" value="40"/></emitter></scene>"#;
+    let scene = load_str(xml, Path::new("t.xml"), Path::new("."), &LoadOptions::default()).unwrap();
+    for kind in [MethodKind::Vrl, MethodKind::Vpl, MethodKind::VrlLightcuts, MethodKind::VplLightcuts] {
+        let options = resolve(kind, &[], Spelling::Flag).unwrap();
+        let e = Method::build(&scene, kind, &options.method, 1).err().expect("an error").to_string();
+        assert!(e.contains("does not support projector emitters (render with volpath)"), "{e}");
+    }
+    let options = resolve(MethodKind::VolPath, &[], Spelling::Flag).unwrap();
+    assert!(Method::build(&scene, MethodKind::VolPath, &options.method, 1).is_ok());
+}

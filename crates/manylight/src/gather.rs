@@ -244,7 +244,7 @@ fn walk(
         let mut frame_wi = None;
         if let Some(h) = &hit {
             let shape = &scene.shapes[h.shape as usize];
-            let frame = Frame::from_normal(h.ns);
+            let frame = scene.shading_frame(h);
             let wi = frame.to_local(-st.ray.d);
             // Next-event estimation here makes paths of `c + 1` events (crate::depth).
             let nee = if st.events < max_light_path {
@@ -473,7 +473,7 @@ fn walk_chain(
         if st.events + 1 >= max_events && !shape.bsdf.may_pass_through() {
             return ChainEnd::Stop;
         }
-        let frame = Frame::from_normal(h.ns);
+        let frame = scene.shading_frame(&h);
         let wi = frame.to_local(-st.ray.d);
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
         if let Some(factor) = st.may_split {

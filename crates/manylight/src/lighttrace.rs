@@ -140,8 +140,9 @@ pub struct SurfaceVplRecord {
     pub p: Vec3,
     /// Geometric normal (the shape's exterior side).
     pub n: Vec3,
-    /// Shading normal.
-    pub ns: Vec3,
+    /// Shading frame (`z` the shading normal; `x` along `dp/du` for anisotropic BSDFs:
+    /// `Scene::shading_frame`).
+    pub frame: haze_core::Frame,
     /// Unit direction from `p` towards the previous vertex of the light path.
     pub w_prev: Vec3,
     /// Light arriving at the vertex, in watts: `beta / mean(r)` before the BSDF.
@@ -157,7 +158,7 @@ pub struct SurfaceVplRecord {
 impl SurfaceVplRecord {
     /// The surface VPL the estimators take.
     pub fn to_surface_vpl(&self) -> crate::vpl::SurfaceVpl {
-        let frame = haze_core::Frame::from_normal(self.ns);
+        let frame = self.frame;
         crate::vpl::SurfaceVpl {
             p: self.p,
             n: self.n,
@@ -380,7 +381,7 @@ fn trace_one(
             out.surface_vpls.push(SurfaceVplRecord {
                 p: h.p,
                 n: h.n,
-                ns: h.ns,
+                frame: scene.shading_frame(&h),
                 w_prev: -ray.d,
                 flux: power * t / r.mean(),
                 shape: h.shape,
@@ -389,7 +390,7 @@ fn trace_one(
                 events,
             });
         }
-        let frame = haze_core::Frame::from_normal(h.ns);
+        let frame = scene.shading_frame(&h);
         let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
             return;
         };

@@ -280,6 +280,8 @@ impl LightPoint {
                     kind: LightKind::Area { weighted_radiance: *radiance / s.pdf, n: s.n },
                 })
             }
+            // volpath only: the engine refuses many-light methods on scenes with one.
+            Emitter::Projector(_) => None,
             // At infinity: `from_infinity`.
             Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => None,
         }

@@ -375,7 +375,7 @@ impl CausticTracer {
             }
             if !shape.bsdf.is_specular() {
                 if through_delta {
-                    let frame = Frame::from_normal(h.ns);
+                    let frame = scene.shading_frame(&h);
                     let vpl = SurfaceVpl {
                         events: 0,
                         p: h.p,
@@ -393,7 +393,7 @@ impl CausticTracer {
                 }
                 return;
             }
-            let frame = Frame::from_normal(h.ns);
+            let frame = scene.shading_frame(&h);
             let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
                 return;
             };

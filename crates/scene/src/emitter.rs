@@ -1,6 +1,8 @@
-//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`, `envmap`, `directional`).
+//! Light sources (Mitsuba 3 plugins `point`, `spot`, `area`, `constant`, `envmap`, `directional`,
+//! `projector`).
 
 use crate::envmap::EnvMap;
+use crate::projector::Projector;
 use crate::texture::Texture;
 use glam::{Mat4, Vec2, Vec3};
 use haze_core::Rgb;
@@ -38,6 +40,8 @@ pub enum Emitter {
     /// `d`, delivering `irradiance` (W/m^2) to a surface perpendicular to `d`. A delta light at
     /// infinity: next-event estimation is the only way to it, no ray hits it.
     Directional { d: Vec3, irradiance: Rgb },
+    /// Mitsuba 3's `projector`: a delta position light projecting an image ([`Projector`]).
+    Projector(Box<Projector>),
 }
 
 impl Emitter {
@@ -110,7 +114,13 @@ impl Emitter {
     /// True for emitters that no ray can hit by chance (`point`, `spot`, `directional`): next-event estimation
     /// is the only way to their light, so no MIS weight involves them.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Emitter::Point { .. } | Emitter::Spot { .. } | Emitter::Directional { .. })
+        matches!(
+            self,
+            Emitter::Point { .. }
+                | Emitter::Spot { .. }
+                | Emitter::Directional { .. }
+                | Emitter::Projector(_)
+        )
     }
 
     /// True for the emitters that escaping rays see (`constant`, `envmap`): radiance at

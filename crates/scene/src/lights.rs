@@ -132,6 +132,22 @@ impl Scene {
                     emitter: idx as u32,
                 })
             }
+            Emitter::Projector(proj) => {
+                let pos = proj.position();
+                let v = pos - p;
+                let d2 = v.length_squared();
+                let dist = d2.sqrt();
+                let wi = v / dist;
+                let intensity = proj.intensity(proj.to_local.transform_vector3(-wi).normalize());
+                (!intensity.is_black()).then(|| EmitterSample {
+                    wi,
+                    dist,
+                    radiance: intensity / d2,
+                    pdf: sel,
+                    is_delta: true,
+                    emitter: idx as u32,
+                })
+            }
             Emitter::Area { shape, radiance } => {
                 let sh = &self.shapes[*shape as usize];
                 let table = self.emitter_tables.area[idx].as_ref()?;
@@ -332,6 +348,20 @@ impl Scene {
                     d,
                     n: Some(s.n),
                     weight: *radiance * (haze_core::PI * table.area * sel),
+                    emitter: idx as u32,
+                })
+            }
+            Emitter::Projector(proj) => {
+                // A uniform point of the image plane `z = 1`: the solid-angle pdf is
+                // `cos^3(theta) / A_image`, so the weight `I / pdf` is `pi s E(uv) A_image`.
+                let local =
+                    Vec3::new((1.0 - 2.0 * u_dir.x) * proj.tan_x, (1.0 - 2.0 * u_dir.y) * proj.tan_y, 1.0);
+                let e = proj.irradiance.eval(u_dir);
+                (!e.is_black()).then(|| EmissionSample {
+                    p: proj.position(),
+                    d: proj.to_world.transform_vector3(local).normalize(),
+                    n: None,
+                    weight: e * (haze_core::PI * proj.scale * 4.0 * proj.tan_x * proj.tan_y * sel),
                     emitter: idx as u32,
                 })
             }

@@ -10,7 +10,7 @@ use crate::medium::{Medium, MediumId};
 use crate::shape::convex::{self, ClearSides};
 use crate::shape::{closed, Geometry, Shape};
 use glam::Vec3;
-use haze_core::Ray;
+use haze_core::{Frame, Ray};
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
@@ -133,6 +133,7 @@ fn sealed_shapes(shapes: &[Shape], emitters: &[Emitter]) -> Vec<f32> {
         match e {
             Emitter::Point { position, .. } => points.push(*position),
             Emitter::Spot { to_world, .. } => points.push(to_world.transform_point3(Vec3::ZERO)),
+            Emitter::Projector(p) => points.push(p.position()),
             Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => {}
             Emitter::Area { .. } => return vec![0.0; shapes.len()],
         }
@@ -324,6 +325,22 @@ impl Scene {
     #[inline]
     pub fn interaction(&self, hit: &PreliminaryHit) -> SurfaceInteraction {
         self.resolve_hit(self.accel.interaction(&self.shapes, hit))
+    }
+
+    /// The local shading frame of the hit `h` (`z` = its shading normal): for a shape whose
+    /// BSDF is anisotropic ([`crate::bsdf::Bsdf::is_anisotropic`]) its `x` axis follows the
+    /// surface's `dp/du` as in Mitsuba 3 ([`crate::shape::tangents::tangent_frame`]); for every
+    /// other BSDF, which is the same about the normal, the cheaper [`Frame::from_normal`].
+    /// Integrators shade in this frame.
+    #[inline]
+    pub fn shading_frame(&self, h: &SurfaceInteraction) -> Frame {
+        let shape = &self.shapes[h.shape as usize];
+        if shape.bsdf.is_anisotropic() {
+            let (dp_du, _) = crate::shape::tangents::uv_tangents(&shape.geometry, h.prim, h.p, h.n);
+            crate::shape::tangents::tangent_frame(h.ns, dp_du)
+        } else {
+            Frame::from_normal(h.ns)
+        }
     }
 
     /// True if anything blocks `ray` before `ray.t_max`.

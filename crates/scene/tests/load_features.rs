@@ -194,6 +194,7 @@ fn integrators_and_sensor_options() {
                 <integer name="width" value="200"/><integer name="height" value="100"/>
                 <string name="pixel_format" value="rgba"/>
                 <string name="component_format" value="float16"/>
+                <boolean name="banner" value="false"/>
                 <rfilter type="box"/>
             </film>
             <sampler type="independent">
@@ -208,6 +209,18 @@ fn integrators_and_sensor_options() {
     let x = 2.0 * ((15f32).to_radians().tan() * 2.0).atan().to_degrees();
     assert!((s.camera.fov_x_deg - x).abs() < 1e-3);
     assert_eq!((s.camera.near_clip, s.camera.far_clip), (0.5, 50.0));
+}
+
+/// `banner` (Mitsuba 0.x) is read and ignored, as Mitsuba 3's hdrfilm does; it must still be
+/// a boolean.
+#[test]
+fn film_banner_is_a_boolean_and_ignored() {
+    let with = |v: &str| format!(r#"<sensor type="perspective"><film type="hdrfilm">{v}</film></sensor>"#);
+    let s = load(&with(r#"<boolean name="banner" value="true"/>"#));
+    assert_eq!((s.camera.width, s.camera.height), (768, 576));
+    let e = expect_error(load_with(&with(r#"<string name="banner" value="yes"/>"#), &LoadOptions::default()));
+    assert!(e.message.contains("wrong type for parameter 'banner': expected <boolean>"), "{e}");
+    assert_eq!(e.line, 2, "{e}");
 }
 
 #[test]
@@ -339,4 +352,30 @@ fn sources_list_every_file_read() {
         haze_scene::load_file_with_sources(&main, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.shapes.len(), 2);
     assert_eq!(files, vec![main.clone(), dir.join("parts/camera.xml"), dir.join("parts/quad.obj")]);
+}
+
+/// `projector` (Mitsuba 3's names and defaults) and its errors, each naming the parameter.
+#[test]
+fn projector_parameters_and_errors() {
+    use haze_scene::emitter::Emitter;
+    let with =
+        |body: &str| format!("<sensor type=\"perspective\"/>\n<emitter type=\"projector\">{body}</emitter>");
+    let s = load(&with(r#"<float name="fov" value="90"/><float name="scale" value="2"/>"#));
+    let Emitter::Projector(p) = &s.emitters[0] else { panic!("a projector") };
+    assert!((p.tan_x - 1.0).abs() < 1e-6 && (p.tan_y - 1.0).abs() < 1e-6 && p.scale == 2.0);
+    assert_eq!(p.irradiance, Rgb::ONE.into());
+    for (body, want) in [
+        (r#"<float name="scale" value="-1"/>"#, "'scale' must be >= 0, got -1"),
+        (r#"<float name="fov" value="180"/>"#, "'fov' must be in (0, 180) degrees"),
+        (r#"<rgb name="irradiance" value="-1"/>"#, "'irradiance' must lie in [0,"),
+        (
+            r#"<transform name="to_world"><scale value="0"/></transform>"#,
+            "the projector's to_world is singular",
+        ),
+        (r#"<float name="cutoff_angle" value="20"/>"#, "unused parameter 'cutoff_angle'"),
+    ] {
+        let e = expect_error(load_with(&with(body), &LoadOptions::default()));
+        assert!(e.message.contains(want), "{body}: {e}");
+        assert_eq!(e.line, 3, "{body}: {e}");
+    }
 }

@@ -195,9 +195,42 @@ fn conductors_take_mitsuba_names_or_eta_and_k() {
         panic!("a rough conductor")
     };
     let Conductor { eta, distr: Some(d), specular_reflectance, .. } = *c else { panic!("rough") };
-    assert_eq!((d.ty, d.alpha, d.sample_visible), (MicrofacetType::Ggx, 0.3, true));
+    let d = *d.fixed().expect("numbers: a fixed roughness");
+    assert_eq!((d.ty, d.alpha_u, d.alpha_v, d.sample_visible), (MicrofacetType::Ggx, 0.3, 0.3, true));
     assert_eq!(eta, haze_core::Rgb::new(0.2, 0.9, 1.1));
     assert_eq!(specular_reflectance, haze_core::Rgb::splat(0.5).into());
+    // Anisotropic and textured roughness (Mitsuba 3's roughconductor, roughdielectric and
+    // pplastic take `alpha`, `alpha_u`, `alpha_v` as numbers or textures).
+    let Ok(haze_scene::Bsdf::Conductor(c)) = bsdf_of(
+        r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/>
+           <string name="material" value="Al"/></bsdf>"#,
+    ) else {
+        panic!("an anisotropic rough conductor")
+    };
+    let d = *c.distr.as_ref().and_then(|d| d.fixed()).expect("fixed");
+    assert_eq!((d.ty, d.alpha_u, d.alpha_v), (MicrofacetType::Beckmann, 0.05, 0.3));
+    for (ty, alphas) in [
+        (
+            "roughdielectric",
+            r#"<texture type="checkerboard" name="alpha"><float name="color0" value="0"/></texture>"#,
+        ),
+        (
+            "roughconductor",
+            r#"<texture type="checkerboard" name="alpha_u"/><texture type="checkerboard" name="alpha_v"><float name="color0" value="0.3"/></texture>"#,
+        ),
+        ("pplastic", r#"<texture type="checkerboard" name="alpha_u"/><float name="alpha_v" value="0.2"/>"#),
+    ] {
+        let xml = format!(r#"<bsdf type="{ty}">{alphas}</bsdf>"#);
+        let b = bsdf_of(&xml).unwrap_or_else(|e| panic!("{xml}: {e}"));
+        let textured = match &b {
+            haze_scene::Bsdf::RoughDielectric(r) => r.distr.fixed().is_none(),
+            haze_scene::Bsdf::Conductor(c) => c.distr.as_ref().is_some_and(|d| d.fixed().is_none()),
+            haze_scene::Bsdf::PPlastic(p) => p.distr.fixed().is_none(),
+            _ => false,
+        };
+        assert!(textured, "{xml}: {b:?}");
+        assert_eq!(b.is_anisotropic(), ty != "roughdielectric", "{xml}");
+    }
     for (xml, want) in [
         (
             r#"<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>"#,
@@ -209,8 +242,24 @@ fn conductors_take_mitsuba_names_or_eta_and_k() {
         ),
         (r#"<bsdf type="conductor"><float name="k" value="-1"/></bsdf>"#, "'k' must lie in [0, 100]"),
         (
-            r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
-            "unsupported: anisotropic roughness",
+            r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="-0.2"/></bsdf>"#,
+            "'alpha_v' must be > 0, got -0.2",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+            "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><texture type="checkerboard" name="alpha"><float name="color1" value="-1"/></texture></bsdf>"#,
+            "'alpha' must lie in [0, 100]",
+        ),
+        (
+            r#"<bsdf type="roughplastic"><texture type="checkerboard" name="alpha"/></bsdf>"#,
+            "does not take a texture 'alpha'",
+        ),
+        (
+            r#"<bsdf type="roughplastic"><float name="alpha_u" value="0.1"/></bsdf>"#,
+            "unused parameter 'alpha_u'",
         ),
         (
             r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf>"#,
@@ -395,7 +444,8 @@ fn pplastic_reads_mitsuba_parameters() {
     ) else {
         panic!("a pplastic")
     };
-    assert_eq!((b.distr.alpha, b.distr.ty), (0.06, haze_scene::bsdf::MicrofacetType::Beckmann));
+    let d = *b.distr.fixed().expect("fixed");
+    assert_eq!((d.alpha_u, d.ty), (0.06, haze_scene::bsdf::MicrofacetType::Beckmann));
     assert!((b.eta - 1.49 / 1.000277).abs() < 1e-6, "polypropylene in air");
     let Ok(haze_scene::Bsdf::PPlastic(b)) =
         bsdf_of(r#"<bsdf type="pplastic"><float name="eta" value="1.3"/></bsdf>"#)

@@ -27,7 +27,7 @@ use crate::components::{Component, PathRadiance};
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::{free_flight_at, free_flight_distance, hero_channel, FreeFlight};
-use haze_core::{Frame, Ray, Rgb, Sampler};
+use haze_core::{Ray, Rgb, Sampler};
 use haze_scene::accel::Leaving;
 use haze_scene::hetero::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
@@ -252,7 +252,7 @@ impl Integrator for VolPath {
                 break;
             }
 
-            let frame = Frame::from_normal(h.ns);
+            let frame = scene.shading_frame(&h);
             let wi = frame.to_local(-ray.d);
             let medium_towards = |d: glam::Vec3| scene.medium_towards(&h, d, medium);
 

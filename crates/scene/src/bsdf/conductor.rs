@@ -4,6 +4,7 @@
 //! The named materials' RGB indices are in `conductor_iors.rs`.
 
 use super::microfacet::Microfacet;
+use super::roughness::Roughness;
 use super::{reflect, BsdfSample};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
@@ -22,7 +23,7 @@ pub struct Conductor {
     /// Mitsuba's `specular_reflectance` factor (1).
     pub specular_reflectance: Texture,
     /// `None`: a smooth mirror (`conductor`); else the facets' distribution (`roughconductor`).
-    pub distr: Option<Microfacet>,
+    pub distr: Option<Roughness>,
 }
 
 /// `(eta, k)` of Mitsuba 3's named conductor `name` (`"Au"`, `"Cu_palik"`, ...; `"none"` is
@@ -74,6 +75,7 @@ impl Conductor {
         let Some(distr) = &self.distr else {
             return Some(BsdfSample::specular(reflect(wi), self.fresnel(wi.z, uv), 1.0, false));
         };
+        let distr = distr.at(uv);
         let m = distr.sample_normal(wi, u2);
         let wi_m = wi.dot(m);
         let wo = 2.0 * wi_m * m - wi;
@@ -85,7 +87,7 @@ impl Conductor {
             return None;
         }
         // eval / pdf: F D G / (4 cos_i) over D pdf_m / (4 wo.m).
-        let f = self.eval(wi, wo, uv);
+        let f = self.eval_with(&distr, wi, wo, uv);
         let weight = f / pdf;
         Some(BsdfSample::glossy(wo, weight, pdf))
     }
@@ -94,6 +96,11 @@ impl Conductor {
     /// (zero for the smooth conductor and below the surface).
     pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
         let Some(distr) = &self.distr else { return Rgb::ZERO };
+        self.eval_with(&distr.at(uv), wi, wo, uv)
+    }
+
+    /// [`Self::eval`] of the rough conductor with the distribution at the hit.
+    fn eval_with(&self, distr: &Microfacet, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Rgb::ZERO;
         }
@@ -107,8 +114,9 @@ impl Conductor {
     }
 
     /// Solid-angle density of [`Self::sample`] producing `wo`.
-    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
         let Some(distr) = &self.distr else { return 0.0 };
+        let distr = distr.at(uv);
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
@@ -130,12 +138,16 @@ mod tests {
     use haze_core::Sampler;
 
     fn rough(ty: MicrofacetType, alpha: f32, visible: bool, material: &str) -> Bsdf {
+        rough_with(Microfacet::new(ty, alpha, visible).into(), material)
+    }
+
+    fn rough_with(distr: Roughness, material: &str) -> Bsdf {
         let (eta, k) = conductor_ior(material).unwrap();
         Bsdf::Conductor(Box::new(Conductor {
             eta,
             k,
             specular_reflectance: Rgb::ONE.into(),
-            distr: Some(Microfacet::new(ty, alpha, visible)),
+            distr: Some(distr),
         }))
     }
 
@@ -210,8 +222,62 @@ mod tests {
                     let r = check_sampling(&b, wi, 1, n);
                     assert!(passed(&r, n), "{ty:?} alpha {alpha} visible {visible} cos {cos}: {r:?}");
                 }
+                // Anisotropic (`alpha_u != alpha_v`), wi at azimuths along, across and
+                // between the axes.
+                for (au, av, cos, phi) in [(0.05, 0.3, 0.7, 0.0), (0.4, 0.1, 0.4, 1.2), (0.6, 0.15, 0.9, 2.0)]
+                {
+                    let b = rough_with(Microfacet::anisotropic(ty, au, av, visible).into(), "Al");
+                    let n = 200_000;
+                    let r = check_sampling(&b, dir(cos, phi), 1, n);
+                    assert!(passed(&r, n), "{ty:?} alpha {au}/{av} visible {visible} cos {cos}: {r:?}");
+                }
             }
         }
+    }
+
+    /// Textured roughness: at each `uv` the BSDF is the fixed-roughness one with the textures'
+    /// values there (a checkerboard of two anisotropic roughnesses, as Mitsuba 3's carbon-fibre
+    /// example), in `eval`, `pdf` and `sample`; and an anisotropic lobe is not the same when
+    /// turned by 90 degrees about the normal (the control: the frame's axes matter).
+    #[test]
+    fn textured_roughness_is_the_fixed_one_at_each_uv() {
+        use crate::texture::Texture;
+        let checker = |a, b| Texture::Checkerboard {
+            color0: Rgb::splat(a),
+            color1: Rgb::splat(b),
+            to_uv: glam::Affine2::from_scale(Vec2::splat(25.0)),
+        };
+        let base = Microfacet::new(MicrofacetType::Beckmann, 0.1, true);
+        let textured = rough_with(
+            Roughness::Textured { base, alpha_u: checker(0.05, 0.3), alpha_v: checker(0.3, 0.05) },
+            "Cu",
+        );
+        let mut s = Sampler::from_seed(9);
+        let (mut across, mut n) = (0usize, 0usize);
+        for _ in 0..500 {
+            let uv = s.next_2d();
+            let t = uv * 25.0;
+            let upper = |x: f32| x - x.floor() > 0.5;
+            // `eval_1` of a checkerboard reads `color0` where the two sides differ (Mitsuba 3.9.1).
+            let (au, av) = if upper(t.x) != upper(t.y) { (0.05, 0.3) } else { (0.3, 0.05) };
+            let fixed =
+                rough_with(Microfacet::anisotropic(MicrofacetType::Beckmann, au, av, true).into(), "Cu");
+            let (wi, wo) =
+                (dir(0.3 + 0.7 * s.next_1d(), 6.0 * s.next_1d()), dir(s.next_1d(), 6.0 * s.next_1d()));
+            assert_eq!(textured.eval(wi, wo, uv), fixed.eval(wi, wo, uv));
+            assert_eq!(textured.pdf(wi, wo, uv), fixed.pdf(wi, wo, uv));
+            let (u1, u2) = (s.next_1d(), s.next_2d());
+            let (a, b) = (textured.sample(wi, u1, u2, uv), fixed.sample(wi, u1, u2, uv));
+            assert_eq!(a.map(|x| (x.wo, x.pdf)), b.map(|x| (x.wo, x.pdf)));
+            // The same lobe turned by 90 degrees about the normal.
+            let turn = |v: Vec3| Vec3::new(-v.y, v.x, v.z);
+            let (turned, f) = (fixed.eval(turn(wi), turn(wo), uv)[0], fixed.eval(wi, wo, uv)[0]);
+            if turned.max(f) > 1e-6 {
+                n += 1;
+                across += usize::from((turned - f).abs() > 0.1 * turned.max(f));
+            }
+        }
+        assert!(n > 100 && across * 2 > n, "only {across} of {n} pairs changed by 10% when turned");
     }
 
     /// Energy: with a perfect mirror material (`none`) the albedo is at most 1 and close to

@@ -1,6 +1,6 @@
-//! Isotropic microfacet distributions (Beckmann and GGX) with Smith shadowing-masking and
-//! sampling of all normals or of the visible normals only, as in Mitsuba 3's
-//! `MicrofacetDistribution` (`microfacet.h`).
+//! Microfacet distributions (Beckmann and GGX, isotropic or anisotropic) with Smith
+//! shadowing-masking and sampling of all normals or of the visible normals only, as in
+//! Mitsuba 3's `MicrofacetDistribution` (`microfacet.h`).
 //!
 //! Directions are in the local shading frame (`z` = macrosurface normal) and point away from the
 //! surface. Microfacet normals `m` have `m.z > 0`.
@@ -29,11 +29,15 @@ impl MicrofacetType {
     }
 }
 
-/// An isotropic microfacet distribution of roughness `alpha` (RMS slope for Beckmann).
+/// A microfacet distribution of roughness `alpha_u` along the shading frame's `x` axis (the
+/// surface's `dp/du`) and `alpha_v` along `y` (RMS slopes for Beckmann); isotropic when equal.
+/// The anisotropic forms are the isotropic ones in slope space stretched by `(alpha_u,
+/// alpha_v)` (Heitz 2014, "Understanding the masking-shadowing function", Section 5).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     pub ty: MicrofacetType,
-    pub alpha: f32,
+    pub alpha_u: f32,
+    pub alpha_v: f32,
     /// Sample the distribution of normals visible from `wi` (Heitz and d'Eon 2014) instead of
     /// `D(m) cos(theta_m)`.
     pub sample_visible: bool,
@@ -43,14 +47,35 @@ impl Microfacet {
     /// `alpha` is clamped to at least 1e-4 as Mitsuba does (a smaller one is numerically a
     /// smooth surface).
     pub fn new(ty: MicrofacetType, alpha: f32, sample_visible: bool) -> Self {
-        Microfacet { ty, alpha: alpha.max(1e-4), sample_visible }
+        Self::anisotropic(ty, alpha, alpha, sample_visible)
     }
 
-    /// The normal distribution `D(m)` (per unit projected... solid angle: `∫ D(m) m.z dm = 1`).
+    /// Roughness `alpha_u` along `x`, `alpha_v` along `y`, each clamped to at least 1e-4 as
+    /// [`Self::new`]'s.
+    pub fn anisotropic(ty: MicrofacetType, alpha_u: f32, alpha_v: f32, sample_visible: bool) -> Self {
+        Microfacet { ty, alpha_u: alpha_u.max(1e-4), alpha_v: alpha_v.max(1e-4), sample_visible }
+    }
+
+    /// The same distribution with both roughnesses multiplied by `factor` (Mitsuba's
+    /// `scale_alpha`).
+    pub fn scaled(self, factor: f32) -> Self {
+        Microfacet { alpha_u: self.alpha_u * factor, alpha_v: self.alpha_v * factor, ..self }
+    }
+
+    /// True if `alpha_u == alpha_v`.
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_u == self.alpha_v
+    }
+
+    /// The normal distribution `D(m)` (per unit projected... solid angle: `∫ D(m) m.z dm = 1`):
+    /// with `e = (m.x / alpha_u)^2 + (m.y / alpha_v)^2`, Beckmann
+    /// `exp(-e / m.z^2) / (pi alpha_u alpha_v m.z^4)`, GGX `1 / (pi alpha_u alpha_v (e + m.z^2)^2)`
+    /// (Walter et al. 2007, eqs. 25 and 33, stretched; Mitsuba 3's `eval`).
     pub fn eval(&self, m: Vec3) -> f32 {
-        let a2 = self.alpha * self.alpha;
+        let a2 = self.alpha_u * self.alpha_v;
         let cos2 = m.z * m.z;
-        let xy = (m.x * m.x + m.y * m.y) / a2;
+        let (x, y) = (m.x / self.alpha_u, m.y / self.alpha_v);
+        let xy = x * x + y * y;
         let d = match self.ty {
             MicrofacetType::Beckmann => (-xy / cos2).exp() / (PI * a2 * cos2 * cos2),
             MicrofacetType::Ggx => {
@@ -68,12 +93,15 @@ impl Microfacet {
 
     /// Smith's monodirectional shadowing-masking `G1(v, m)`; zero when `v` sees the back of
     /// the microfacet (`dot(v, m)` and `v.z` of different signs). The Beckmann one is
-    /// Walter et al.'s (2007) rational fit.
+    /// Walter et al.'s (2007) rational fit. Anisotropic: the isotropic form at the roughness
+    /// seen along `v`'s azimuth, `tan^2(theta) alpha^2 = ((alpha_u v.x)^2 + (alpha_v v.y)^2) / v.z^2`
+    /// (Heitz 2014, eq. 80).
     pub fn smith_g1(&self, v: Vec3, m: Vec3) -> f32 {
         if v.dot(m) * v.z <= 0.0 {
             return 0.0;
         }
-        let xy_alpha2 = self.alpha * self.alpha * (v.x * v.x + v.y * v.y);
+        let (x, y) = (self.alpha_u * v.x, self.alpha_v * v.y);
+        let xy_alpha2 = x * x + y * y;
         if xy_alpha2 == 0.0 {
             return 1.0;
         }
@@ -118,7 +146,8 @@ impl Microfacet {
     /// The normal of [`Self::sample`] without its pdf.
     pub fn sample_normal(&self, wi: Vec3, u: Vec2) -> Vec3 {
         if self.sample_visible {
-            let wi_p = Vec3::new(self.alpha * wi.x, self.alpha * wi.y, wi.z).normalize();
+            // Stretch to the unit-roughness configuration (Heitz and d'Eon 2014, Section 4.1).
+            let wi_p = Vec3::new(self.alpha_u * wi.x, self.alpha_v * wi.y, wi.z).normalize();
             let sin_theta = (1.0 - wi_p.z * wi_p.z).max(0.0).sqrt();
             let (sin_phi, cos_phi) = if sin_theta > 0.0 {
                 ((wi_p.y / sin_theta).clamp(-1.0, 1.0), (wi_p.x / sin_theta).clamp(-1.0, 1.0))
@@ -126,17 +155,32 @@ impl Microfacet {
                 (0.0, 1.0)
             };
             let s = self.sample_visible_11(wi_p.z, u);
-            let slope = Vec2::new(cos_phi * s.x - sin_phi * s.y, sin_phi * s.x + cos_phi * s.y) * self.alpha;
+            let slope = Vec2::new(cos_phi * s.x - sin_phi * s.y, sin_phi * s.x + cos_phi * s.y)
+                * Vec2::new(self.alpha_u, self.alpha_v);
             Vec3::new(-slope.x, -slope.y, 1.0).normalize()
         } else {
-            let a2 = self.alpha * self.alpha;
+            // `D(m) cos(theta_m)`: the azimuth, then `tan^2(theta_m)` from its marginal at the
+            // roughness `alpha(phi)` of that azimuth.
+            let (phi, a2) = if self.is_isotropic() {
+                (2.0 * PI * u.y, self.alpha_u * self.alpha_u)
+            } else {
+                // In slope space the density is a function of `r / alpha(phi)` with
+                // `1 / alpha(phi)^2 = cos^2(phi) / alpha_u^2 + sin^2(phi) / alpha_v^2`, so the
+                // azimuth has density `alpha(phi)^2 / (2 pi alpha_u alpha_v)`, whose inverse
+                // CDF is `atan(alpha_v / alpha_u tan(2 pi u))` on the right branch
+                // (Walter et al. 2007 stretched; Mitsuba 3's `MicrofacetDistribution::sample`).
+                let phi = (self.alpha_v / self.alpha_u * (PI + 2.0 * PI * u.y).tan()).atan()
+                    + PI * (2.0 * u.y + 0.5).floor();
+                let (s, c) = phi.sin_cos();
+                let (cu, sv) = (c / self.alpha_u, s / self.alpha_v);
+                (phi, 1.0 / (cu * cu + sv * sv))
+            };
             let tan2 = match self.ty {
                 MicrofacetType::Beckmann => -a2 * (1.0 - u.x).ln(),
                 MicrofacetType::Ggx => a2 * u.x / (1.0 - u.x),
             };
             let cos_theta = 1.0 / (1.0 + tan2).sqrt();
             let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-            let phi = 2.0 * PI * u.y;
             Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta)
         }
     }
@@ -425,9 +469,9 @@ mod tests {
     fn all() -> Vec<Microfacet> {
         let mut v = Vec::new();
         for ty in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
-            for alpha in [0.1, 0.5] {
+            for (alpha_u, alpha_v) in [(0.1, 0.1), (0.5, 0.5), (0.05, 0.3), (0.6, 0.15)] {
                 for vis in [true, false] {
-                    v.push(Microfacet::new(ty, alpha, vis));
+                    v.push(Microfacet::anisotropic(ty, alpha_u, alpha_v, vis));
                 }
             }
         }
@@ -515,7 +559,7 @@ mod tests {
                 b += (d.eval(m) * d.smith_g1(wi, m) * wi.dot(m).max(0.0)) as f64;
             }
             let scale = 2.0 * std::f64::consts::PI / n as f64;
-            let tol = if d.alpha < 0.2 { 0.05 } else { 0.01 };
+            let tol = if d.alpha_u.min(d.alpha_v) < 0.2 { 0.05 } else { 0.01 };
             assert!((a * scale - 1.0).abs() < tol, "{d:?}: {}", a * scale);
             // Smith G1 of the Beckmann fit is approximate (Walter et al. report < 0.4 %).
             assert!((b * scale / 0.8 - 1.0).abs() < tol, "{d:?}: {}", b * scale / 0.8);

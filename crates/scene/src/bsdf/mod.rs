@@ -18,6 +18,7 @@ mod perturbed;
 mod plastic;
 mod pplastic;
 mod roughdielectric;
+mod roughness;
 mod roughplastic;
 mod thindielectric;
 mod twosided;
@@ -31,6 +32,7 @@ pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 pub use pplastic::PPlastic;
 pub use roughdielectric::RoughDielectric;
+pub use roughness::Roughness;
 pub use roughplastic::RoughPlastic;
 
 use crate::texture::Texture;
@@ -151,6 +153,22 @@ impl Bsdf {
         }
     }
 
+    /// True if the BSDF's roughness differs along the surface's `dp/du` and `dp/dv` (an
+    /// anisotropic or textured `alpha_u`/`alpha_v`): its shading frame must then follow `dp/du`
+    /// ([`crate::Scene::shading_frame`]); every other BSDF is the same about the normal.
+    pub fn is_anisotropic(&self) -> bool {
+        match self {
+            Bsdf::RoughDielectric(b) => b.distr.is_anisotropic(),
+            Bsdf::Conductor(c) => c.distr.as_ref().is_some_and(Roughness::is_anisotropic),
+            Bsdf::PPlastic(b) => b.distr.is_anisotropic(),
+            Bsdf::Mask(m) => m.nested.is_anisotropic(),
+            Bsdf::TwoSided(b) => b.is_anisotropic(),
+            Bsdf::Blend(b) => b.nested.iter().any(Bsdf::is_anisotropic),
+            Bsdf::Perturbed(p) => p.nested.is_anisotropic(),
+            _ => false,
+        }
+    }
+
     /// True for BSDFs whose every sample is specular (no NEE at their vertices).
     pub fn is_specular(&self) -> bool {
         match self {
@@ -190,7 +208,7 @@ impl Bsdf {
             }
             Bsdf::Dielectric { eta } => Some(dielectric::sample(*eta, wi, u1)),
             Bsdf::ThinDielectric { eta } => Some(thindielectric::sample(*eta, wi, u1)),
-            Bsdf::RoughDielectric(b) => b.sample(wi, u1, u2, with_pdf),
+            Bsdf::RoughDielectric(b) => b.sample(wi, u1, u2, uv, with_pdf),
             Bsdf::Plastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::RoughPlastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::TwoSided(b) => twosided::sample(b, wi, u1, u2, uv, with_pdf),
@@ -208,7 +226,7 @@ impl Bsdf {
             Bsdf::Diffuse { reflectance } if wi.z > 0.0 && wo.z > 0.0 => {
                 reflectance.eval(uv) * (INV_PI * wo.z)
             }
-            Bsdf::RoughDielectric(b) => Rgb::splat(b.eval(wi, wo)),
+            Bsdf::RoughDielectric(b) => Rgb::splat(b.eval(wi, wo, uv)),
             Bsdf::Plastic(b) => b.eval(wi, wo, uv),
             Bsdf::RoughPlastic(b) => b.eval(wi, wo, uv),
             Bsdf::TwoSided(b) => twosided::eval(b, wi, wo, uv),
@@ -263,13 +281,13 @@ impl Bsdf {
     pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
         match self {
             Bsdf::Diffuse { .. } if wi.z > 0.0 && wo.z > 0.0 => cosine_hemisphere_pdf(wo.z),
-            Bsdf::RoughDielectric(b) => b.pdf(wi, wo),
+            Bsdf::RoughDielectric(b) => b.pdf(wi, wo, uv),
             Bsdf::Plastic(b) => b.pdf(wi, wo),
             Bsdf::RoughPlastic(b) => b.pdf(wi, wo),
             Bsdf::TwoSided(b) => twosided::pdf(b, wi, wo, uv),
-            Bsdf::Conductor(c) => c.pdf(wi, wo),
+            Bsdf::Conductor(c) => c.pdf(wi, wo, uv),
             Bsdf::Mask(m) => m.pdf(wi, wo, uv),
-            Bsdf::PPlastic(b) => b.pdf(wi, wo),
+            Bsdf::PPlastic(b) => b.pdf(wi, wo, uv),
             Bsdf::Blend(b) => b.pdf(wi, wo, uv),
             Bsdf::Perturbed(p) => p.nested.pdf(wi, wo, uv),
             _ => 0.0,
@@ -454,7 +472,7 @@ mod tests {
             Bsdf::TwoSided(Box::new(Bsdf::ThinDielectric { eta: 1.5 })),
             Bsdf::TwoSided(Box::new(Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() })),
             Bsdf::RoughDielectric(roughdielectric::RoughDielectric {
-                distr: Microfacet::new(MicrofacetType::Beckmann, 0.3, true),
+                distr: Microfacet::new(MicrofacetType::Beckmann, 0.3, true).into(),
                 eta: 1.5,
             }),
         ];
@@ -490,7 +508,7 @@ mod tests {
             for vis in [true, false] {
                 let distr = Microfacet::new(ty, 0.3, vis);
                 kinds.push(Bsdf::RoughPlastic(Box::new(RoughPlastic::new(distr, tex(), 1.49, vis))));
-                kinds.push(Bsdf::RoughDielectric(RoughDielectric { distr, eta: 1.3 }));
+                kinds.push(Bsdf::RoughDielectric(RoughDielectric { distr: distr.into(), eta: 1.3 }));
             }
         }
         kinds.push(Bsdf::TwoSided(Box::new(kinds[6].clone())));
@@ -520,8 +538,10 @@ mod tests {
             vec![Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() }, Bsdf::Dielectric { eta: 1.5 }];
         for ty in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
             for vis in [true, false] {
-                let rough =
-                    Bsdf::RoughDielectric(RoughDielectric { distr: Microfacet::new(ty, 0.3, vis), eta: 1.3 });
+                let rough = Bsdf::RoughDielectric(RoughDielectric {
+                    distr: Microfacet::new(ty, 0.3, vis).into(),
+                    eta: 1.3,
+                });
                 kinds.push(Bsdf::TwoSided(Box::new(rough.clone())));
                 kinds.push(rough);
             }
@@ -529,9 +549,9 @@ mod tests {
         let mut s = Sampler::from_seed(23);
         for b in &kinds {
             let skips = match b {
-                Bsdf::RoughDielectric(r) => r.distr.sample_visible,
+                Bsdf::RoughDielectric(r) => r.distr.sample_visible(),
                 Bsdf::TwoSided(inner) => {
-                    matches!(&**inner, Bsdf::RoughDielectric(r) if r.distr.sample_visible)
+                    matches!(&**inner, Bsdf::RoughDielectric(r) if r.distr.sample_visible())
                 }
                 _ => false,
             };

@@ -6,6 +6,7 @@
 
 use super::fresnel_dielectric;
 use super::microfacet::Microfacet;
+use super::roughness::Roughness;
 use super::BsdfSample;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
@@ -14,7 +15,7 @@ use haze_core::{Rgb, INV_PI};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct PPlastic {
-    pub distr: Microfacet,
+    pub distr: Roughness,
     /// `int_ior / ext_ior`.
     pub eta: f32,
     pub diffuse_reflectance: Texture,
@@ -25,7 +26,7 @@ pub struct PPlastic {
 
 impl PPlastic {
     pub fn new(
-        distr: Microfacet,
+        distr: Roughness,
         eta: f32,
         diffuse_reflectance: Texture,
         specular_reflectance: Texture,
@@ -40,7 +41,7 @@ impl PPlastic {
             return None;
         }
         let wo = if u1 < self.specular_weight {
-            let m = self.distr.sample_normal(wi, u2);
+            let m = self.distr.at(uv).sample_normal(wi, u2);
             2.0 * wi.dot(m) * m - wi
         } else {
             sample_cosine_hemisphere(u2)
@@ -53,16 +54,18 @@ impl PPlastic {
         self.eval_pdf(wi, wo, uv).0
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+        self.pdf_with(&self.distr.at(uv), wi, wo)
+    }
+
+    /// [`Self::pdf`] with the distribution at the hit.
+    fn pdf_with(&self, distr: &Microfacet, wi: Vec3, wo: Vec3) -> f32 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
         let m = (wi + wo).normalize();
-        let p_spec = if wi.dot(m) <= 0.0 || wo.dot(m) <= 0.0 {
-            0.0
-        } else {
-            self.distr.pdf(wi, m) / (4.0 * wo.dot(m))
-        };
+        let p_spec =
+            if wi.dot(m) <= 0.0 || wo.dot(m) <= 0.0 { 0.0 } else { distr.pdf(wi, m) / (4.0 * wo.dot(m)) };
         self.specular_weight * p_spec + (1.0 - self.specular_weight) * cosine_hemisphere_pdf(wo.z)
     }
 
@@ -71,14 +74,15 @@ impl PPlastic {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Rgb::ZERO, 0.0);
         }
+        let distr = self.distr.at(uv);
         let m = (wi + wo).normalize();
         let (f_m, _, _) = fresnel_dielectric(wi.dot(m), self.eta);
-        let specular = self.distr.eval(m) * self.distr.g(wi, wo, m) / (4.0 * wi.z);
+        let specular = distr.eval(m) * distr.g(wi, wo, m) / (4.0 * wi.z);
         let (f_i, _, _) = fresnel_dielectric(wi.z, self.eta);
         let (f_o, _, _) = fresnel_dielectric(wo.z, self.eta);
         let diffuse = self.diffuse_reflectance.eval(uv) * ((1.0 - f_i) * (1.0 - f_o) * INV_PI * wo.z);
         let f = self.specular_reflectance.eval(uv) * (f_m * specular) + diffuse;
-        (f, self.pdf(wi, wo))
+        (f, self.pdf_with(&distr, wi, wo))
     }
 }
 
@@ -91,7 +95,7 @@ mod tests {
 
     fn pplastic(ty: MicrofacetType, alpha: f32, visible: bool, rho: f32) -> Bsdf {
         Bsdf::PPlastic(Box::new(PPlastic::new(
-            Microfacet::new(ty, alpha, visible),
+            Microfacet::new(ty, alpha, visible).into(),
             1.49,
             Rgb::splat(rho).into(),
             Rgb::ONE.into(),

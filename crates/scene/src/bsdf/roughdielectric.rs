@@ -3,6 +3,7 @@
 //! picking a microfacet normal and then reflection or refraction with its Fresnel probability.
 
 use super::microfacet::Microfacet;
+use super::roughness::Roughness;
 use super::BsdfSample;
 use crate::bsdf::fresnel_dielectric;
 use glam::{Vec2, Vec3};
@@ -10,7 +11,7 @@ use haze_core::Rgb;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughDielectric {
-    pub distr: Microfacet,
+    pub distr: Roughness,
     /// `int_ior / ext_ior`.
     pub eta: f32,
 }
@@ -27,12 +28,12 @@ fn mulsign(v: Vec3, s: f32) -> Vec3 {
 impl RoughDielectric {
     /// The distribution used for sampling: Walter et al.'s widened one (`alpha` scaled by
     /// `1.2 - 0.2 sqrt|cos_i|`) when visible normals are not sampled, as Mitsuba does.
-    fn sample_distr(&self, cos_i: f32) -> Microfacet {
-        let mut d = self.distr;
-        if !d.sample_visible {
-            d.alpha *= 1.2 - 0.2 * cos_i.abs().sqrt();
+    fn sample_distr(d: Microfacet, cos_i: f32) -> Microfacet {
+        if d.sample_visible {
+            d
+        } else {
+            d.scaled(1.2 - 0.2 * cos_i.abs().sqrt())
         }
-        d
     }
 
     /// The generalised half vector of `(wi, wo)` on the side of the macrosurface normal, and
@@ -46,13 +47,14 @@ impl RoughDielectric {
 
     /// `with_pdf`: see [`super::Bsdf::sample_with`] (the pdf is skipped only with visible-normal
     /// sampling, whose weight does not need it).
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, with_pdf: bool) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;
         }
-        let with_pdf = with_pdf || !self.distr.sample_visible;
-        let distr = self.sample_distr(cos_i);
+        let at_uv = self.distr.at(uv);
+        let with_pdf = with_pdf || !at_uv.sample_visible;
+        let distr = Self::sample_distr(at_uv, cos_i);
         let wi_s = mulsign(wi, cos_i);
         let m = distr.sample_normal(wi_s, u2);
         let m_pdf = if with_pdf { distr.pdf(wi_s, m) } else { 1.0 };
@@ -85,9 +87,9 @@ impl RoughDielectric {
             eta_it * eta_it * wo_m / (wi_m + eta_it * wo_m).powi(2)
         };
         let pdf = m_pdf * pdf_lobe * dwh_dwo.abs();
-        let weight = if self.distr.sample_visible {
+        let weight = if at_uv.sample_visible {
             // f |cos wo| / pdf = G1(wo, m) (times 1/eta^2 after refraction).
-            let g1 = self.distr.smith_g1(wo, m);
+            let g1 = at_uv.smith_g1(wo, m);
             if reflected {
                 g1
             } else {
@@ -95,7 +97,7 @@ impl RoughDielectric {
             }
         } else {
             // Sampled from the widened distribution: weight by the evaluated BSDF.
-            self.eval(wi, wo) / pdf
+            self.eval_with(&at_uv, wi, wo) / pdf
         };
         if (pdf.is_nan() || pdf <= 0.0) || !weight.is_finite() {
             return None;
@@ -112,15 +114,20 @@ impl RoughDielectric {
     }
 
     /// `f(wi, wo) |cos(wo)|` (the same for every channel).
-    pub fn eval(&self, wi: Vec3, wo: Vec3) -> f32 {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+        self.eval_with(&self.distr.at(uv), wi, wo)
+    }
+
+    /// [`Self::eval`] with the distribution at the hit.
+    fn eval_with(&self, distr: &Microfacet, wi: Vec3, wo: Vec3) -> f32 {
         let (cos_i, cos_o) = (wi.z, wo.z);
         if cos_i == 0.0 || cos_o == 0.0 {
             return 0.0;
         }
         let (m, eta, reflect) = self.half_vector(wi, wo);
-        let d = self.distr.eval(m);
+        let d = distr.eval(m);
         let (f, _, _) = fresnel_dielectric(wi.dot(m), self.eta);
-        let g = self.distr.g(wi, wo, m);
+        let g = distr.g(wi, wo, m);
         if reflect {
             f * d * g / (4.0 * cos_i.abs())
         } else {
@@ -131,7 +138,7 @@ impl RoughDielectric {
         }
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
         let (cos_i, cos_o) = (wi.z, wo.z);
         if cos_i == 0.0 || cos_o == 0.0 {
             return 0.0;
@@ -144,7 +151,8 @@ impl RoughDielectric {
         let dwh_dwo =
             if reflect { 1.0 / (4.0 * wo_m) } else { eta * eta * wo_m / (wi_m + eta * wo_m).powi(2) };
         let (f, _, _) = fresnel_dielectric(wi_m, self.eta);
-        let prob = self.sample_distr(cos_i).pdf(mulsign(wi, cos_i), m) * if reflect { f } else { 1.0 - f };
+        let prob = Self::sample_distr(self.distr.at(uv), cos_i).pdf(mulsign(wi, cos_i), m)
+            * if reflect { f } else { 1.0 - f };
         let p = prob * dwh_dwo.abs();
         if p.is_finite() {
             p
@@ -162,7 +170,14 @@ mod tests {
     use super::*;
 
     fn rough(ty: MicrofacetType, alpha: f32, eta: f32, vis: bool) -> Bsdf {
-        Bsdf::RoughDielectric(RoughDielectric { distr: Microfacet::new(ty, alpha, vis), eta })
+        rough_aniso(ty, alpha, alpha, eta, vis)
+    }
+
+    fn rough_aniso(ty: MicrofacetType, alpha_u: f32, alpha_v: f32, eta: f32, vis: bool) -> Bsdf {
+        Bsdf::RoughDielectric(RoughDielectric {
+            distr: Microfacet::anisotropic(ty, alpha_u, alpha_v, vis).into(),
+            eta,
+        })
     }
 
     /// White furnace: a rough interface loses energy only to the single-scattering
@@ -186,14 +201,14 @@ mod tests {
     #[test]
     fn roughdielectric_sampling_matches_pdf() {
         for ty in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
-            for alpha in [0.1f32, 0.5] {
+            for alpha in [(0.1f32, 0.1f32), (0.5, 0.5), (0.05, 0.4)] {
                 for vis in [true, false] {
                     for (eta, cz) in [(1.5f32, 0.8f32), (1.5, 0.3), (1.33, -0.6)] {
-                        let b = rough(ty, alpha, eta, vis);
+                        let b = rough_aniso(ty, alpha.0, alpha.1, eta, vis);
                         let r = check_sampling(&b, dir(cz, 1.0), 17, 200_000);
                         assert!(
                             passed(&r, 200_000),
-                            "{ty:?} alpha {alpha} visible {vis} eta {eta} cos {cz}: {r}"
+                            "{ty:?} alpha {alpha:?} visible {vis} eta {eta} cos {cz}: {r}"
                         );
                     }
                 }
@@ -208,12 +223,12 @@ mod tests {
         let mut s = haze_core::Sampler::from_seed(8);
         for ty in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
             let eta = 1.5;
-            let b = RoughDielectric { distr: Microfacet::new(ty, 0.3, true), eta };
+            let b = RoughDielectric { distr: Microfacet::anisotropic(ty, 0.3, 0.1, true).into(), eta };
             for _ in 0..1000 {
                 let wi = haze_core::sampling::sample_uniform_sphere(s.next_2d());
                 let wo = haze_core::sampling::sample_uniform_sphere(s.next_2d());
-                let f_io = b.eval(wi, wo) / wo.z.abs();
-                let f_oi = b.eval(wo, wi) / wi.z.abs();
+                let f_io = b.eval(wi, wo, Vec2::ZERO) / wo.z.abs();
+                let f_oi = b.eval(wo, wi, Vec2::ZERO) / wi.z.abs();
                 let (ratio, expect) = if wi.z * wo.z > 0.0 {
                     (f_io, f_oi)
                 } else {

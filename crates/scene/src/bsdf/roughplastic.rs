@@ -152,7 +152,8 @@ fn tables(distr: Microfacet, eta: f32) -> (Vec<f32>, f32) {
     /// Transmittance table and internal reflectance per (distribution, alpha, eta).
     type Tables = HashMap<Key, (Vec<f32>, f32)>;
     static CACHE: OnceLock<Mutex<Tables>> = OnceLock::new();
-    let key = (distr.ty, distr.alpha.to_bits(), eta.to_bits());
+    // roughplastic is isotropic (Mitsuba 3 takes one scalar `alpha` there).
+    let key = (distr.ty, distr.alpha_u.to_bits(), eta.to_bits());
     let cache = CACHE.get_or_init(Default::default);
     if let Some(t) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
         return t.clone();

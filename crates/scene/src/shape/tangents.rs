@@ -1,5 +1,6 @@
 //! The surface's parameterisation derivatives `dp/du` and `dp/dv` at a hit, which normal and
-//! bump maps orient their tangent space by (Mitsuba 3's `SurfaceInteraction::dp_du`, `dp_dv`).
+//! bump maps orient their tangent space by (Mitsuba 3's `SurfaceInteraction::dp_du`, `dp_dv`),
+//! and the shading frame anisotropic BSDFs are evaluated in.
 
 use super::Geometry;
 use glam::{Vec2, Vec3};
@@ -74,11 +75,47 @@ pub fn uv_tangents(geometry: &Geometry, prim: u32, p: Vec3, n: Vec3) -> (Vec3, V
     }
 }
 
+/// The shading frame around the unit shading normal `ns` whose `s` axis is `dp_du` made
+/// orthogonal to `ns` (Gram-Schmidt), `t = ns x s`: Mitsuba 3's
+/// `SurfaceInteraction::initialize_sh_frame`, the frame in which its anisotropic roughness
+/// `alpha_u` lies along `s`. Falls back to [`Frame::from_normal`] where `dp_du` is parallel to
+/// `ns`.
+pub fn tangent_frame(ns: Vec3, dp_du: Vec3) -> Frame {
+    let s = (dp_du - ns * ns.dot(dp_du)).normalize_or_zero();
+    if s == Vec3::ZERO {
+        return Frame::from_normal(ns);
+    }
+    Frame { s, t: ns.cross(s), n: ns }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::shape::TriangleMesh;
     use glam::Mat4;
+
+    /// The anisotropic shading frame: orthonormal, right-handed (`s x t = n`, as
+    /// `Frame::from_normal`'s), `s` along `dp/du` made orthogonal to the normal, and the
+    /// normal's own frame where `dp/du` is parallel to it.
+    #[test]
+    fn tangent_frame_follows_dp_du() {
+        let ns = Vec3::new(0.2, -0.3, 0.93).normalize();
+        for dp_du in [Vec3::new(2.0, 0.1, 0.0), Vec3::new(-0.3, 4.0, 1.0), ns * 3.0] {
+            let f = tangent_frame(ns, dp_du);
+            for (a, b) in [(f.s, f.t), (f.t, f.n), (f.s, f.n)] {
+                assert!(a.dot(b).abs() < 1e-6 && (a.length() - 1.0).abs() < 1e-6);
+            }
+            assert!((f.s.cross(f.t) - f.n).length() < 1e-6);
+            let along = dp_du - ns * ns.dot(dp_du);
+            if along.length() > 1e-3 {
+                assert!((f.s - along.normalize()).length() < 1e-6, "{dp_du}");
+            } else {
+                assert_eq!(f, Frame::from_normal(ns));
+            }
+        }
+        let g = Frame::from_normal(ns);
+        assert!((g.s.cross(g.t) - g.n).length() < 1e-6, "Frame::from_normal is right-handed too");
+    }
 
     /// The tangents are the finite differences of the position along `u` and `v`: on a
     /// triangle with skewed uvs, on a sphere through its uv mapping, on a scaled disk.

@@ -7,8 +7,9 @@ use super::params::Params;
 use super::{textures, LoadError};
 use crate::bsdf::{
     conductor_ior, Blend, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, PPlastic, Perturbation,
-    Perturbed, Plastic, RoughDielectric, RoughPlastic,
+    Perturbed, Plastic, RoughDielectric, RoughPlastic, Roughness,
 };
+use crate::texture::Texture;
 use haze_core::color::SpectrumKind;
 use haze_core::Rgb;
 
@@ -52,10 +53,12 @@ pub fn ior_by_name(name: &str) -> Option<f32> {
 /// - `dielectric`, `thindielectric`: `int_ior` (default `"bk7"` = 1.5046) and `ext_ior`
 ///   (`"air"` = 1.000277), numbers or names from [`NAMED_IORS`]; `eta = int_ior / ext_ior`.
 /// - `roughdielectric`: the same plus `distribution` (`beckmann` (default) or `ggx`), `alpha`
-///   (0.1, must be > 0) and `sample_visible` (true).
+///   (0.1, must be > 0) or `alpha_u` and `alpha_v` (numbers or textures), and `sample_visible`
+///   (true).
 /// - `plastic`: `diffuse_reflectance` (0.5, spectrum or texture), `int_ior`
 ///   (`"polypropylene"` = 1.49), `ext_ior` (`"air"`), `nonlinear` (false).
-/// - `roughplastic`: the same plus `distribution`, `alpha` and `sample_visible` as above.
+/// - `roughplastic`: the same plus `distribution`, `alpha` (a number only, as in Mitsuba 3)
+///   and `sample_visible` as above.
 /// - `twosided`: one nested or referenced BSDF, used on both sides.
 ///
 /// Mitsuba's `specular_reflectance`/`specular_transmittance` scale factors are accepted only at
@@ -71,7 +74,7 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
             match p.ty() {
                 "dielectric" => Bsdf::Dielectric { eta },
                 "thindielectric" => Bsdf::ThinDielectric { eta },
-                _ => Bsdf::RoughDielectric(RoughDielectric { distr: microfacet(p)?, eta }),
+                _ => Bsdf::RoughDielectric(RoughDielectric { distr: roughness(p)?, eta }),
             }
         }
         "plastic" | "roughplastic" => {
@@ -119,7 +122,7 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
                 Some(e) => e,
                 None => eta(p, "polypropylene")?,
             };
-            Bsdf::PPlastic(Box::new(PPlastic::new(microfacet(p)?, eta, diffuse, specular)))
+            Bsdf::PPlastic(Box::new(PPlastic::new(roughness(p)?, eta, diffuse, specular)))
         }
         "mask" => {
             // Mitsuba 3: `opacity` (0.5; a float, spectrum or texture in [0, 1]) over one
@@ -187,7 +190,7 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
         "conductor" | "roughconductor" => {
             let (eta, k) = complex_ior(p)?;
             let specular_reflectance = textures::texture(p, "specular_reflectance", Rgb::ONE, (0.0, 1.0))?;
-            let distr = if p.ty() == "roughconductor" { Some(microfacet(p)?) } else { None };
+            let distr = if p.ty() == "roughconductor" { Some(roughness(p)?) } else { None };
             Bsdf::Conductor(Box::new(Conductor { eta, k, specular_reflectance, distr }))
         }
         _ => Bsdf::Null,
@@ -195,11 +198,13 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
     let texture_params: &[&str] = match p.ty() {
         "diffuse" => &["reflectance"],
         "plastic" | "roughplastic" => &["diffuse_reflectance"],
-        "conductor" | "roughconductor" => &["specular_reflectance"],
+        "conductor" => &["specular_reflectance"],
+        "roughconductor" => &["specular_reflectance", "alpha", "alpha_u", "alpha_v"],
+        "roughdielectric" => &["alpha", "alpha_u", "alpha_v"],
         "mask" => &["opacity"],
         "blendbsdf" => &["weight"],
         "normalmap" => &["normalmap"],
-        "pplastic" => &["diffuse_reflectance", "specular_reflectance"],
+        "pplastic" => &["diffuse_reflectance", "specular_reflectance", "alpha", "alpha_u", "alpha_v"],
         _ => &[],
     };
     // The bump map's one texture may have any name (Mitsuba 3 takes it by kind).
@@ -276,48 +281,75 @@ fn complex_ior(p: &Params) -> Result<(Rgb, Rgb), LoadError> {
     Ok((eta, k))
 }
 
-/// `distribution` (`beckmann` default, `ggx`), `alpha` (0.1, > 0) and `sample_visible` (true).
-/// For the conductors also `alpha_u` and `alpha_v` (both or neither, instead of `alpha`), which
-/// must be equal: haze's microfacet distributions are isotropic.
+/// `distribution` (`beckmann` default, `ggx`), `alpha` (0.1, > 0) and `sample_visible` (true),
+/// as Mitsuba 3's `roughplastic` reads them (one number: its tables are built per roughness).
 fn microfacet(p: &Params) -> Result<Microfacet, LoadError> {
-    let ty = match p.string_opt("distribution")? {
-        None => MicrofacetType::Beckmann,
+    let ty = distribution(p)?;
+    let alpha = alpha_value(p, "alpha")?;
+    Ok(Microfacet::new(ty, alpha, p.bool("sample_visible", true)?))
+}
+
+/// The roughness of `roughconductor`, `roughdielectric` and `pplastic`, as Mitsuba 3 reads it:
+/// `distribution` and `sample_visible` as [`microfacet`], and `alpha` (0.1), or `alpha_u` and
+/// `alpha_v` (both, and not with `alpha`), each a number (> 0) or a texture (read as one
+/// number, values in [0, 100]; below 1e-4 they count as 1e-4, as Mitsuba clamps them).
+fn roughness(p: &Params) -> Result<Roughness, LoadError> {
+    let ty = distribution(p)?;
+    let sample_visible = p.bool("sample_visible", true)?;
+    let is_texture = |name: &str| p.objects(&["texture"]).iter().any(|o| o.name == Some(name));
+    let given = |name: &str| p.raw(name).is_some() || is_texture(name);
+    let value = |name: &str| -> Result<Texture, LoadError> {
+        if is_texture(name) {
+            textures::texture(p, name, Rgb::splat(0.1), (0.0, MAX_ALPHA))
+        } else {
+            Ok(Texture::Constant(Rgb::splat(alpha_value(p, name)?)))
+        }
+    };
+    let (alpha_u, alpha_v) = match (given("alpha_u"), given("alpha_v")) {
+        (false, false) => {
+            let a = value("alpha")?;
+            (a.clone(), a)
+        }
+        (true, true) => {
+            if given("alpha") {
+                return Err(p.error_at("alpha", "give either 'alpha' or 'alpha_u' and 'alpha_v', not both"));
+            }
+            (value("alpha_u")?, value("alpha_v")?)
+        }
+        (true, false) => return Err(p.error_at("alpha_u", "'alpha_u' needs 'alpha_v' too")),
+        (false, true) => return Err(p.error_at("alpha_v", "'alpha_v' needs 'alpha_u' too")),
+    };
+    Ok(match (&alpha_u, &alpha_v) {
+        (Texture::Constant(u), Texture::Constant(v)) => {
+            Roughness::Fixed(Microfacet::anisotropic(ty, u[0], v[0], sample_visible))
+        }
+        _ => Roughness::Textured { base: Microfacet::new(ty, 0.1, sample_visible), alpha_u, alpha_v },
+    })
+}
+
+/// `distribution`: `beckmann` (default) or `ggx`.
+fn distribution(p: &Params) -> Result<MicrofacetType, LoadError> {
+    match p.string_opt("distribution")? {
+        None => Ok(MicrofacetType::Beckmann),
         Some(name) => MicrofacetType::from_name(name).ok_or_else(|| {
             p.error_at(
                 "distribution",
                 format!("unknown microfacet distribution '{name}' (supported: beckmann, ggx)"),
             )
-        })?,
-    };
-    let anisotropic = match p.ty() {
-        "roughconductor" | "pplastic" => (p.float_opt("alpha_u")?, p.float_opt("alpha_v")?),
-        _ => (None, None),
-    };
-    let alpha = match anisotropic {
-        (None, None) => p.float("alpha", 0.1)?,
-        (Some(u), Some(v)) => {
-            if p.float_opt("alpha")?.is_some() {
-                return Err(p.error_at("alpha", "give either 'alpha' or 'alpha_u' and 'alpha_v', not both"));
-            }
-            if u != v {
-                return Err(p.error_at(
-                    "alpha_v",
-                    format!("unsupported: anisotropic roughness (alpha_u {u} != alpha_v {v}); haze's microfacets are isotropic"),
-                ));
-            }
-            u
-        }
-        (Some(_), None) => return Err(p.error_at("alpha_u", "'alpha_u' needs 'alpha_v' too")),
-        (None, Some(_)) => return Err(p.error_at("alpha_v", "'alpha_v' needs 'alpha_u' too")),
-    };
+        }),
+    }
+}
+
+/// A roughness given as a number (default 0.1): in (0, [`MAX_ALPHA`]].
+fn alpha_value(p: &Params, name: &str) -> Result<f32, LoadError> {
+    let alpha = p.float(name, 0.1)?;
     if alpha.is_nan() || alpha <= 0.0 {
-        return Err(p.error_at("alpha", format!("'alpha' must be > 0, got {alpha}")));
+        return Err(p.error_at(name, format!("'{name}' must be > 0, got {alpha}")));
     }
     if alpha > MAX_ALPHA {
-        return Err(p.error_at("alpha", format!("'alpha' must be at most {MAX_ALPHA}, got {alpha}")));
+        return Err(p.error_at(name, format!("'{name}' must be at most {MAX_ALPHA}, got {alpha}")));
     }
-    let sample_visible = p.bool("sample_visible", true)?;
-    Ok(Microfacet::new(ty, alpha, sample_visible))
+    Ok(alpha)
 }
 
 /// An index of refraction given as a number (`<float>`) or a material name (`<string>`).

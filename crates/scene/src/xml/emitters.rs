@@ -1,4 +1,5 @@
-//! Emitter plugins `point`, `spot`, `constant`, `envmap`, `directional`, and `area` (inside a shape).
+//! Emitter plugins `point`, `spot`, `constant`, `envmap`, `directional`, `projector`, and `area`
+//! (inside a shape).
 
 use super::document::Document;
 use super::params::Params;
@@ -17,6 +18,8 @@ use std::sync::Arc;
 ///   `texture` (none; a texture or spectrum multiplying the intensity, see
 ///   [`Emitter::spot_texture`]).
 /// - `constant`: `radiance` 1.
+/// - `projector`: `irradiance` 1 (a spectrum or texture), `scale` 1, `to_world`, `fov`,
+///   `fov_axis`, `focal_length` (see [`crate::projector::Projector`]).
 /// - `envmap`: `filename` (required; an OpenEXR or Radiance HDR latitude-longitude image,
 ///   found through the `<path>` folders like any file), `scale` 1, `to_world` (identity; a
 ///   rotation, without scaling).
@@ -77,6 +80,32 @@ pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
                 None
             };
             Emitter::spot(to_world, intensity, cutoff.to_radians(), beam.to_radians(), texture)
+        }
+        "projector" => {
+            // Mitsuba 3's `projector`: `irradiance` (1; a spectrum or texture, >= 0), `scale`
+            // (1), `to_world`, and the perspective camera's `fov`/`fov_axis`/`focal_length`,
+            // whose aspect ratio is the image's (1 for a constant irradiance).
+            let to_world = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
+            if !to_world.inverse().is_finite() || glam::Mat3::from_mat4(to_world).determinant().abs() < 1e-12
+            {
+                return Err(
+                    p.error_at("to_world", "the projector's to_world is singular (it has no inverse)")
+                );
+            }
+            let irradiance =
+                super::textures::texture(p, "irradiance", Rgb::ONE, (0.0, super::MAX_MAGNITUDE))?;
+            let scale = p.float("scale", 1.0)?;
+            if scale < 0.0 {
+                return Err(p.error_at("scale", format!("'scale' must be >= 0, got {scale}")));
+            }
+            let aspect = match &irradiance {
+                crate::texture::Texture::Bitmap(b) => b.width as f32 / b.height as f32,
+                _ => 1.0,
+            };
+            let fov_x = super::sensor::fov_x(p, aspect)?;
+            Emitter::Projector(Box::new(crate::projector::Projector::new(
+                to_world, irradiance, scale, fov_x, aspect,
+            )))
         }
         "constant" => Emitter::Constant { radiance: non_negative(p, "radiance")? },
         "envmap" => {

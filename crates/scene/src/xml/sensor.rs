@@ -168,7 +168,10 @@ pub(super) fn diagonal_fov_of_focal_length(f_mm: f32) -> f32 {
     2.0 * ((36.0f32 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * f_mm)).atan().to_degrees()
 }
 
-fn fov_x(p: &Params, aspect: f32) -> Result<f32, LoadError> {
+/// The horizontal field of view in degrees from `fov` (with `fov_axis`) or `focal_length`
+/// (`"50mm"` by default), for an image of the given aspect ratio (width over height): the
+/// perspective camera's and the projector's (Mitsuba 3's `parse_fov`).
+pub(super) fn fov_x(p: &Params, aspect: f32) -> Result<f32, LoadError> {
     let fov = p.float_opt("fov")?;
     let focal = p.string_opt("focal_length")?;
     if fov.is_some() && focal.is_some() {
@@ -200,8 +203,10 @@ fn fov_x(p: &Params, aspect: f32) -> Result<f32, LoadError> {
 
 /// `hdrfilm`: `width` and `height` (768x576), `pixel_format` `rgb`/`rgba`,
 /// `component_format` `float16`/`float32`, `file_format` `openexr`; haze writes what its
-/// command line asks for, so the last three are only checked. The nested `<rfilter>` (default
-/// `gaussian`, as Mitsuba 3) is read by [`rfilter`].
+/// command line asks for, so the last three are only checked. `banner` (a boolean) is a
+/// Mitsuba 0.x parameter that Mitsuba 3's `hdrfilm` marks as read and ignores ("no banner in
+/// Mitsuba 3"); haze does the same. The nested `<rfilter>` (default `gaussian`, as Mitsuba 3)
+/// is read by [`rfilter`].
 fn film(p: &Params) -> Result<(u32, u32, PixelFilter), LoadError> {
     let side = |name: &str, default: u32| -> Result<u32, LoadError> {
         let v = p.int(name, default as i32)?;
@@ -226,6 +231,8 @@ fn film(p: &Params) -> Result<(u32, u32, PixelFilter), LoadError> {
             }
         }
     }
+    // Checked to be a boolean, then ignored, as Mitsuba 3 does.
+    p.bool("banner", false)?;
     let filter = match single(p, "rfilter")? {
         Some(el) => rfilter(&p.nested(el)?)?,
         None => PixelFilter::MITSUBA_DEFAULT,
