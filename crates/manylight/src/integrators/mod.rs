@@ -7,13 +7,12 @@ mod lightcuts;
 mod vpl;
 mod vrl;
 
-pub use lightcuts::probe as selection_probe;
 pub use lightcuts::{
-    Builder, ClusterKind, CutSizeProbe, CutStrategy, LightcutPass, LightcutSettings, LightcutsIntegrator,
-    Vpls, Vrls,
+    Builder, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass, LightcutSettings,
+    LightcutsIntegrator, SegmentCut, Vpls, Vrls,
 };
 pub use vpl::VplIntegrator;
-pub use vrl::VrlIntegrator;
+pub use vrl::{TestControls, VrlIntegrator};
 
 use crate::camera::{estimator_medium, CameraSegment};
 use crate::lighttrace::{paths_for_vrl_count, trace_light_paths, LightSet, LightTraceSettings};

@@ -15,10 +15,11 @@
 #[cfg(test)]
 mod bound_tests;
 mod kinds;
-pub mod probe;
+mod observer;
 mod surface;
 
 pub use kinds::{ClusterKind, Vpls, Vrls};
+pub use observer::{CutObserver, SegmentCut};
 
 use super::{
     caustic_tracer, light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment,
@@ -331,7 +332,7 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        whole_path_radiance(scene, ray, medium, sampler, &LightcutGather { integrator: self, scene, pass })
+        self.radiance_observed(scene, pass, ray, medium, sampler, &())
     }
 
     fn summary(&self) -> Option<String> {
@@ -361,6 +362,21 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
 }
 
 impl<K: ClusterKind> LightcutsIntegrator<K> {
+    /// `Integrator::radiance` with `observer` shown every stochastic cut of a camera segment
+    /// (the same radiance, bit for bit).
+    pub fn radiance_observed(
+        &self,
+        scene: &Scene,
+        pass: &LightcutPass<K>,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut Sampler,
+        observer: &impl CutObserver<K>,
+    ) -> PathRadiance {
+        let gather = LightcutGather { integrator: self, scene, pass, observer };
+        whole_path_radiance(scene, ray, medium, sampler, &gather)
+    }
+
     fn record(&self, s: &CutStats) {
         if s.size == 0 {
             return;
@@ -444,6 +460,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         cs: &CameraSegment,
         key: u64,
         group: usize,
+        observer: &impl CutObserver<K>,
     ) -> Rgb {
         let forest = &pass.forests[group];
         if forest.tree.is_empty() {
@@ -487,10 +504,15 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                         }
                     },
                 );
-                if probe::probed(key) {
-                    let share = self.settings.stochastic.power_share;
-                    probe::record::<K>(scene, pass, cs, key, forest, &importance, share);
-                }
+                observer.stochastic_cut(&SegmentCut {
+                    scene,
+                    media: &pass.media,
+                    cs,
+                    key,
+                    forest,
+                    importance: &importance,
+                    power_share: self.settings.stochastic.power_share,
+                });
                 if PROBING.get() {
                     let (mut total, mut largest) = (0.0f64, 0.0f64);
                     for &n in scratch.cut() {
@@ -518,10 +540,11 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
 }
 
 /// The lightcut integrator's side of the camera walk (`gather.rs`).
-struct LightcutGather<'a, K: ClusterKind> {
+struct LightcutGather<'a, K: ClusterKind, O> {
     integrator: &'a LightcutsIntegrator<K>,
     scene: &'a Scene,
     pass: &'a LightcutPass<K>,
+    observer: &'a O,
 }
 
 /// Separates the numbers of a sampled light's further joint samples (`light_samples`).
@@ -532,10 +555,10 @@ const SAMPLE_STREAM: u64 = 0x3c6e_f372_fe94_f82b;
 const SURFACE_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;
 const POINT_STREAM: u64 = 0x51ed_2705_a3c1_9e4d;
 
-impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
+impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
     fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
         let (scene, pass) = (self.scene, self.pass);
-        let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g));
+        let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g, self.observer));
         let cam_medium = &pass.media[cs.medium as usize];
         let ctx = ImportanceContext::new(cs.seg, cam_medium);
         let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_STREAM, |i| {
@@ -619,7 +642,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
     }
 }
 
-impl<K: ClusterKind> LightcutGather<'_, K> {
+impl<K: ClusterKind, O> LightcutGather<'_, K, O> {
     /// The stochastic cut's estimate (`cut_size` nodes, one light each) of the sum of `eval`
     /// over the lights of `tree`, descending with `importance` and the numbers of `key`.
     fn cut_sum(
