@@ -41,6 +41,7 @@ use crate::tree::stochastic::{
 use crate::tree::{LightTree, Node};
 use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
+use haze_core::streams::{LIGHT_SAMPLES, POINT_CUT, SEGMENT_CUT, SURFACE_VPL_CUT, TREE_SEEDS};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
@@ -273,10 +274,10 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let splats =
             self.caustics.as_ref().map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass));
         let n = a.len() + b.len() + surface_vpls.len();
-        let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
+        let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ TREE_SEEDS[0])];
         let surface_tree = {
             let summaries: Vec<LightSummary> = surface_vpls.iter().map(surface_vpl_summary).collect();
-            SampleTree::new(&self.build_tree(&summaries, tree_seed ^ 2))
+            SampleTree::new(&self.build_tree(&summaries, tree_seed ^ TREE_SEEDS[1]))
         };
         let sigma_mean = if media.is_empty() {
             0.0
@@ -480,7 +481,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                 };
                 let mut sum = Rgb::ZERO;
                 let light_samples = self.settings.stochastic.light_samples;
-                let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
+                let descent_key = key ^ SEGMENT_CUT.wrapping_mul(group as u64 + 1);
                 let size = stochastic_cut(
                     &forest.sample,
                     &importance,
@@ -498,7 +499,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                             let kj = if j == 0 {
                                 key
                             } else {
-                                haze_core::rng::mix64(key ^ j.wrapping_mul(SAMPLE_STREAM))
+                                haze_core::rng::mix64(key ^ j.wrapping_mul(LIGHT_SAMPLES))
                             };
                             sum += K::contribution(scene, cs, &pass.media, l, kj, light) * weight;
                         }
@@ -547,21 +548,13 @@ struct LightcutGather<'a, K: ClusterKind, O> {
     observer: &'a O,
 }
 
-/// Separates the numbers of a sampled light's further joint samples (`light_samples`).
-const SAMPLE_STREAM: u64 = 0x3c6e_f372_fe94_f82b;
-
-/// Separate the descents of the surface VPL tree for camera segments and of the trees for
-/// gathering points from each other and from the lights' own numbers (`light_uniforms`).
-const SURFACE_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;
-const POINT_STREAM: u64 = 0x51ed_2705_a3c1_9e4d;
-
 impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
     fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
         let (scene, pass) = (self.scene, self.pass);
         let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g, self.observer));
         let cam_medium = &pass.media[cs.medium as usize];
         let ctx = ImportanceContext::new(cs.seg, cam_medium);
-        let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_STREAM, |i| {
+        let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_VPL_CUT, |i| {
             surface_vpl_to_segment(
                 scene,
                 &pass.surface_vpls[i as usize],
@@ -604,7 +597,7 @@ impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
             return Rgb::ZERO;
         }
         let prob = |g: usize| mixed_probability(imp[g], imp_sum, pow[g] / pow_sum, share);
-        let u = light_uniforms(key ^ POINT_STREAM, 0).x;
+        let u = light_uniforms(key ^ POINT_CUT, 0).x;
         // Falls back to the last tree with power if rounding leaves `u` above the sum.
         let mut g = pow.iter().rposition(|&p| p > 0.0).unwrap_or(2);
         let mut acc = 0.0;
@@ -619,7 +612,7 @@ impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
         if p_tree <= 0.0 {
             return Rgb::ZERO;
         }
-        let stream = POINT_STREAM.wrapping_mul(g as u64 + 2);
+        let stream = POINT_CUT.wrapping_mul(g as u64 + 2);
         let sum = if g < 2 {
             let forest = &pass.forests[g];
             let importance = |n: &SampleNode| {
