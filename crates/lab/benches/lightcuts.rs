@@ -63,13 +63,7 @@ struct Args {
 fn main() -> Result<()> {
     let args = Args::parse();
     setup::set_threads(args.threads)?;
-    let scenes = if args.scenes.is_empty() {
-        ["hg-box.xml", "foggy-room.xml"]
-            .map(|s| PathBuf::from("tests/data/validation/scenes").join(s))
-            .to_vec()
-    } else {
-        args.scenes.clone()
-    };
+    let scenes = setup::scenes_or_validation(&args.scenes);
     for path in &scenes {
         lightcuts_tables(&args, path)?;
     }

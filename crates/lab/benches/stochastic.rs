@@ -52,13 +52,7 @@ const ROUNDS: usize = 5;
 fn main() -> Result<()> {
     let args = Args::parse();
     setup::set_threads(args.threads)?;
-    let scenes = if args.scenes.is_empty() {
-        ["hg-box.xml", "foggy-room.xml"]
-            .map(|s| PathBuf::from("tests/data/validation/scenes").join(s))
-            .to_vec()
-    } else {
-        args.scenes.clone()
-    };
+    let scenes = setup::scenes_or_validation(&args.scenes);
     let mut given = vec![("spp", args.spp.as_deref().unwrap_or("16"))];
     if let Some(k) = args.cut_size.as_deref() {
         given.push(("cut_size", k));

@@ -16,6 +16,7 @@
 use haze_engine::options::MethodKind;
 use haze_lab::selection::{SelectionProbe, SelectionRecord};
 use haze_lab::setup;
+use haze_manylight::integrators::Observed;
 use haze_render::progressive::{render, RenderSettings};
 use std::sync::atomic::AtomicBool;
 
@@ -73,8 +74,9 @@ fn main() {
             first_pass: 0,
             sampler: Default::default(),
         };
-        let probe = SelectionProbe::new(&integrator, every);
-        render(&scene, &probe, &settings, &AtomicBool::new(false), |_| {});
+        let probe = SelectionProbe::new(every);
+        let observed = Observed { integrator: &integrator, observer: &probe };
+        render(&scene, &observed, &settings, &AtomicBool::new(false), |_| {});
         let records = probe.take_records();
         let weighted = |f: fn(&SelectionRecord) -> f64| {
             let w: f64 = records.iter().map(|r| r.sum * r.sum).sum();

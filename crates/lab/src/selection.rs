@@ -11,15 +11,13 @@
 //!
 //! reported for the tree's descent from the root (`k = 1`), for probabilities proportional to
 //! power alone, and for probabilities proportional to each leaf's own importance (the tree's
-//! structure taken out). [`SelectionProbe`] renders through the integrator's
-//! `radiance_observed`, so the shipped integrator has no check of its own on the hot path.
+//! structure taken out). [`SelectionProbe`] watches the cuts of a render through
+//! `haze_manylight::integrators::Observed`, so the shipped integrator has no check of its own
+//! on the hot path.
 
 use haze_core::rng::mix64;
-use haze_core::{Ray, Sampler};
-use haze_manylight::integrators::{ClusterKind, CutObserver, LightcutPass, LightcutsIntegrator, SegmentCut};
+use haze_manylight::integrators::{ClusterKind, CutObserver, SegmentCut};
 use haze_manylight::tree::stochastic::{light_probabilities, power as tree_power};
-use haze_render::{Integrator, PathRadiance};
-use haze_scene::{MediumId, Scene};
 use std::sync::Mutex;
 
 /// Joint samples averaged per light for its mean contribution.
@@ -47,18 +45,17 @@ pub struct SelectionRecord {
     pub joint_all: f64,
 }
 
-/// `integrator` rendered as it renders (the image is unchanged), recording one camera segment
-/// in `every` (by a hash of its key) into [`SelectionProbe::take_records`].
-pub struct SelectionProbe<'a, K: ClusterKind> {
-    integrator: &'a LightcutsIntegrator<K>,
+/// Records one camera segment in `every` (by a hash of its key) into
+/// [`SelectionProbe::take_records`]; render with `Observed { integrator, observer: &probe }`.
+pub struct SelectionProbe {
     every: u64,
     records: Mutex<Vec<SelectionRecord>>,
 }
 
-impl<'a, K: ClusterKind> SelectionProbe<'a, K> {
+impl SelectionProbe {
     /// `every` is at least 1.
-    pub fn new(integrator: &'a LightcutsIntegrator<K>, every: u64) -> Self {
-        SelectionProbe { integrator, every: every.max(1), records: Mutex::new(Vec::new()) }
+    pub fn new(every: u64) -> Self {
+        SelectionProbe { every: every.max(1), records: Mutex::new(Vec::new()) }
     }
 
     /// The records so far, emptying the store.
@@ -67,40 +64,13 @@ impl<'a, K: ClusterKind> SelectionProbe<'a, K> {
     }
 }
 
-impl<K: ClusterKind> CutObserver<K> for SelectionProbe<'_, K> {
+impl<K: ClusterKind> CutObserver<K> for SelectionProbe {
     fn stochastic_cut(&self, cut: &SegmentCut<'_, K>) {
         if mix64(cut.key ^ PROBE_STREAM) % self.every == 0 {
             if let Some(r) = record(cut) {
                 self.records.lock().unwrap_or_else(|e| e.into_inner()).push(r);
             }
         }
-    }
-}
-
-impl<K: ClusterKind> Integrator for SelectionProbe<'_, K> {
-    type PassData = LightcutPass<K>;
-
-    fn name(&self) -> &str {
-        self.integrator.name()
-    }
-
-    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
-        self.integrator.begin_pass(scene, seed, pass)
-    }
-
-    fn pixel_light(&self, pass: &LightcutPass<K>, pixel: u64) -> haze_core::Rgb {
-        self.integrator.pixel_light(pass, pixel)
-    }
-
-    fn radiance(
-        &self,
-        scene: &Scene,
-        pass: &LightcutPass<K>,
-        ray: Ray,
-        medium: Option<MediumId>,
-        sampler: &mut Sampler,
-    ) -> PathRadiance {
-        self.integrator.radiance_observed(scene, pass, ray, medium, sampler, self)
     }
 }
 

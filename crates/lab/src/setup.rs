@@ -23,6 +23,17 @@ pub fn scene_path(path: &Path) -> PathBuf {
     }
 }
 
+/// `scenes`, or without any the validation scenes `hg-box.xml` and `foggy-room.xml`.
+pub fn scenes_or_validation(scenes: &[PathBuf]) -> Vec<PathBuf> {
+    if scenes.is_empty() {
+        ["hg-box.xml", "foggy-room.xml"]
+            .map(|s| PathBuf::from("tests/data/validation/scenes").join(s))
+            .to_vec()
+    } else {
+        scenes.to_vec()
+    }
+}
+
 /// Loads the scene at `path` (see [`scene_path`]) with `NAME=VALUE` overrides of its
 /// `<default>` parameters.
 pub fn load_scene(path: &Path, defines: &[String]) -> Result<Scene> {

@@ -9,7 +9,7 @@ mod vrl;
 
 pub use lightcuts::{
     Builder, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass, LightcutSettings,
-    LightcutsIntegrator, SegmentCut, Vpls, Vrls,
+    LightcutsIntegrator, Observed, SegmentCut, Vpls, Vrls,
 };
 pub use vpl::VplIntegrator;
 pub use vrl::{TestControls, VrlIntegrator};

@@ -19,7 +19,7 @@ mod observer;
 mod surface;
 
 pub use kinds::{ClusterKind, Vpls, Vrls};
-pub use observer::{CutObserver, SegmentCut};
+pub use observer::{CutObserver, Observed, SegmentCut};
 
 use super::{
     caustic_tracer, light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment,
@@ -333,7 +333,8 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        self.radiance_observed(scene, pass, ray, medium, sampler, &())
+        let gather = LightcutGather { integrator: self, scene, pass, observer: &() };
+        whole_path_radiance(scene, ray, medium, sampler, &gather)
     }
 
     fn summary(&self) -> Option<String> {
@@ -363,21 +364,6 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
 }
 
 impl<K: ClusterKind> LightcutsIntegrator<K> {
-    /// `Integrator::radiance` with `observer` shown every stochastic cut of a camera segment
-    /// (the same radiance, bit for bit).
-    pub fn radiance_observed(
-        &self,
-        scene: &Scene,
-        pass: &LightcutPass<K>,
-        ray: Ray,
-        medium: Option<MediumId>,
-        sampler: &mut Sampler,
-        observer: &impl CutObserver<K>,
-    ) -> PathRadiance {
-        let gather = LightcutGather { integrator: self, scene, pass, observer };
-        whole_path_radiance(scene, ray, medium, sampler, &gather)
-    }
-
     fn record(&self, s: &CutStats) {
         if s.size == 0 {
             return;
