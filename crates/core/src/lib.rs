@@ -19,6 +19,7 @@ pub mod rng;
 pub mod sampler;
 pub mod sampling;
 pub mod spectrum;
+pub mod streams;
 pub mod transmittance;
 
 pub use frame::Frame;

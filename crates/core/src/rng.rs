@@ -25,8 +25,8 @@ pub use crate::hash::mix64;
 impl Sampler {
     /// A stream determined by `seed` and two integer keys (e.g. pixel index and pass index).
     pub fn new(seed: u64, key_a: u64, key_b: u64) -> Self {
-        let state = mix64(seed ^ mix64(key_a.wrapping_add(0x9e37_79b9_7f4a_7c15)));
-        let stream = mix64(key_b ^ mix64(seed.wrapping_add(0x632b_e59b_d9b4_e019)));
+        let state = mix64(seed ^ mix64(key_a.wrapping_add(crate::streams::SAMPLER_STATE)));
+        let stream = mix64(key_b ^ mix64(seed.wrapping_add(crate::streams::SAMPLER_SEQUENCE)));
         Sampler { rng: Pcg32::new(state, stream | 1), pattern: None }
     }
 

@@ -199,6 +199,16 @@ impl Method {
         }
     }
 
+    /// `vrl`'s light paths per pass and its camera segment x VRL evaluations so far (each with
+    /// its visibility test: the brute-force sum's unit of cost, which `haze bench` rates).
+    /// `None` for other methods.
+    pub fn vrl_evaluations(&self) -> Option<(u64, u64)> {
+        match self {
+            Method::Vrl(i) => Some((i.paths_per_pass(), i.evaluations())),
+            _ => None,
+        }
+    }
+
     /// Mean number of nodes per cut (per camera segment), for lightcut methods.
     pub fn mean_cut_size(&self) -> Option<f64> {
         match self {

@@ -60,6 +60,7 @@ use crate::vpl::SurfaceVpl;
 use glam::{Vec2, Vec3};
 use haze_core::ray::offset_origin;
 use haze_core::sampling::{sample_uniform_cone, sample_uniform_sphere};
+use haze_core::streams::CAUSTIC_PATHS;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler, PI};
 use haze_render::integrators::transmittance_to;
@@ -118,9 +119,6 @@ pub struct CausticTracer {
     max_len: f32,
 }
 
-/// Separates the caustic paths' random numbers from every other stream of the same seed.
-const CAUSTIC_STREAM: u64 = 0x5b1a_7c0f_fee0_0001;
-
 impl CausticTracer {
     /// `paths` caustic paths per pass, at most `max_events` delta vertices (non-null samples)
     /// each before their connection (`crate::depth`: `e + 1 <= max_depth - 1`); `None` if the
@@ -169,7 +167,7 @@ impl CausticTracer {
     }
 
     /// The splats of one pass's caustic paths (path `i` draws from
-    /// `Sampler::new(seed ^ CAUSTIC_STREAM, i, pass)`). Deterministic: chunks of paths run in
+    /// `Sampler::new(seed ^ CAUSTIC_PATHS, i, pass)`). Deterministic: chunks of paths run in
     /// parallel, the sums in path order.
     pub fn splats(&self, scene: &Scene, seed: u64, pass: u32) -> CameraSplats {
         const CHUNK: u64 = 1024;
@@ -180,7 +178,7 @@ impl CausticTracer {
             .map(|c| {
                 let mut hits = Vec::new();
                 for i in c * CHUNK..((c + 1) * CHUNK).min(self.paths) {
-                    let mut s = Sampler::new(seed ^ CAUSTIC_STREAM, i, pass as u64);
+                    let mut s = Sampler::new(seed ^ CAUSTIC_PATHS, i, pass as u64);
                     self.trace(scene, &view, &mut s, inv, &mut hits);
                 }
                 hits

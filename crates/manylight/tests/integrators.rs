@@ -6,7 +6,7 @@
 mod compare_support;
 
 use compare_support::*;
-use haze_manylight::integrators::{ManyLightSettings, VplIntegrator, VrlIntegrator};
+use haze_manylight::integrators::{ManyLightSettings, TestControls, VplIntegrator, VrlIntegrator};
 use haze_render::{Component, VolPath};
 use haze_scene::{load_file, LoadOptions, Scene};
 use haze_testkit::data::validation_scene;
@@ -145,8 +145,8 @@ fn glass_ball_room_whole_image_matches_volpath() {
     (scene.camera.width, scene.camera.height) = (16, 12);
     let (paths, passes) = (20, 40);
     let reference = check_against_volpath(&scene, "", paths, passes, true);
-    let mut wrong = VrlIntegrator::new(&scene, settings(&scene, paths), 1).unwrap();
-    wrong.gather_point_scale = 0.0;
+    let off = TestControls { gather_point_scale: 0.0, ..TestControls::default() };
+    let wrong = VrlIntegrator::with_test_controls(&scene, settings(&scene, paths), 1, off).unwrap();
     let wrong = render_passes(&scene, &wrong, 2 * passes, 1, 1);
     let (r, mean_z) = compare(&wrong, &reference, Component::Surface);
     println!("vrl without the light at gathering points, surface: {r}; per-pass image-mean z = {mean_z:.2}");
@@ -180,13 +180,15 @@ fn caustic_paths_match_the_camera_continuation() {
         scene.camera.filter = filter;
         let continuation =
             render_passes(&scene, &VrlIntegrator::new(&scene, with(&scene, 0), 1).unwrap(), passes, 16, 1);
-        let mut splatting = VrlIntegrator::new(&scene, with(&scene, 2000), 1).unwrap();
+        let splatting = VrlIntegrator::new(&scene, with(&scene, 2000), 1).unwrap();
         let splats = render_passes(&scene, &splatting, passes, 16, 1);
         let (r, _) = compare(&splats, &continuation, Component::Surface);
         let z = paired_z(&splats, &continuation, Component::Surface);
         judge(&mut failures, &format!("{filter:?}: caustic paths vs continuation (paired z)"), &r, z, 0.01);
         if filter == PixelFilter::Box {
-            splatting.caustic_scale = 1.2;
+            let brighter = TestControls { caustic_scale: 1.2, ..TestControls::default() };
+            let splatting =
+                VrlIntegrator::with_test_controls(&scene, with(&scene, 2000), 1, brighter).unwrap();
             let wrong = render_passes(&scene, &splatting, passes, 16, 1);
             let z = paired_z(&wrong, &continuation, Component::Surface);
             println!("caustic splats x 1.2: paired image-mean z = {z:.2}");
@@ -212,8 +214,8 @@ fn split_at_the_first_glass_vertex_matches_the_unsplit_walk() {
     scene.camera.fov_x_deg = 20.0;
     let (paths, passes) = (20, 48);
     let with_split = |split: Option<f32>, seed: u64| {
-        let mut i = VrlIntegrator::new(&scene, settings(&scene, paths), seed).unwrap();
-        i.split = split;
+        let controls = TestControls { split, ..TestControls::default() };
+        let i = VrlIntegrator::with_test_controls(&scene, settings(&scene, paths), seed, controls).unwrap();
         render_passes(&scene, &i, passes, 4, seed)
     };
     // Same seeds: the passes' light paths are the same, the camera paths part at the glass.
@@ -415,14 +417,15 @@ fn caustic_paths_match_the_camera_continuation_in_smoke() {
         ..settings(&scene, paths)
     };
     let continuation = render_passes(&scene, &VrlIntegrator::new(&scene, with(0), 1).unwrap(), passes, 16, 1);
-    let mut splatting = VrlIntegrator::new(&scene, with(2000), 1).unwrap();
+    let splatting = VrlIntegrator::new(&scene, with(2000), 1).unwrap();
     let splats = render_passes(&scene, &splatting, passes, 16, 1);
     let (r, _) = compare(&splats, &continuation, Component::Surface);
     let z = paired_z(&splats, &continuation, Component::Surface);
     let mut failures = Vec::new();
     judge(&mut failures, "smoke: caustic paths vs continuation (paired z)", &r, z, 0.01);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    splatting.caustic_scale = 1.2;
+    let brighter = TestControls { caustic_scale: 1.2, ..TestControls::default() };
+    let splatting = VrlIntegrator::with_test_controls(&scene, with(2000), 1, brighter).unwrap();
     let wrong = render_passes(&scene, &splatting, passes, 16, 1);
     let z = paired_z(&wrong, &continuation, Component::Surface);
     println!("smoke: caustic splats x 1.2: paired image-mean z = {z:.2}");

@@ -8,15 +8,15 @@
 
 use super::permute::{hash2, permute};
 use super::{SamplerKind, SamplerSpec};
+use crate::streams::{PATTERN_PERMUTATIONS, PATTERN_SCRAMBLE};
 
 /// The largest `f32` below 1: sums like `(p + jitter) / n` round up to 1 for large `n`.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// Multipliers that make the per-purpose permutation seeds of one dimension differ (Kensler's
-/// and Mitsuba's constants; any odd numbers would do).
-const SEED_INDEX: u32 = 0x51633e2d;
-const SEED_SUB_X: u32 = 0x68bc21eb;
-const SEED_SUB_Y: u32 = 0x02e5be93;
+/// The per-purpose permutation seeds' multipliers (`crate::streams::PATTERN_PERMUTATIONS`).
+const SEED_INDEX: u32 = PATTERN_PERMUTATIONS[0];
+const SEED_SUB_X: u32 = PATTERN_PERMUTATIONS[1];
+const SEED_SUB_Y: u32 = PATTERN_PERMUTATIONS[2];
 
 /// Where a pixel's pattern stands: the generator, the pixel's seeds, the sample and the
 /// dimension to draw next.
@@ -48,7 +48,7 @@ impl Pattern {
         if spec.kind == SamplerKind::Independent {
             return None;
         }
-        let pixel_seed = crate::hash::mix64(seed ^ crate::hash::mix64(pixel ^ 0x5851_f42d_4c95_7f2d));
+        let pixel_seed = crate::hash::mix64(seed ^ crate::hash::mix64(pixel ^ crate::streams::PATTERN_PIXEL));
         let mut p = Pattern {
             kind: spec.kind,
             jitter: spec.jitter,
@@ -56,7 +56,7 @@ impl Pattern {
             res: spec.resolution(),
             pixel_seed,
             round_seed: 0,
-            scramble: (hash2(pixel_seed, 0x48bc_48eb), hash2(pixel_seed, 0x98bc_51ab)),
+            scramble: (hash2(pixel_seed, PATTERN_SCRAMBLE[0]), hash2(pixel_seed, PATTERN_SCRAMBLE[1])),
             index: 0,
             round: 0,
             dim: 0,

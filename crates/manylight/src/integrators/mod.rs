@@ -7,17 +7,17 @@ mod lightcuts;
 mod vpl;
 mod vrl;
 
-pub use lightcuts::probe as selection_probe;
 pub use lightcuts::{
-    Builder, ClusterKind, CutSizeProbe, CutStrategy, LightcutPass, LightcutSettings, LightcutsIntegrator,
-    Vpls, Vrls,
+    Builder, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass, LightcutSettings,
+    LightcutsIntegrator, Observed, SegmentCut, Vpls, Vrls,
 };
 pub use vpl::VplIntegrator;
-pub use vrl::VrlIntegrator;
+pub use vrl::{TestControls, VrlIntegrator};
 
 use crate::camera::{estimator_medium, CameraSegment};
 use crate::lighttrace::{paths_for_vrl_count, trace_light_paths, LightSet, LightTraceSettings};
 use crate::vrl::VrlMedium;
+use haze_core::streams::SURFACE_VPL_INDEX;
 use haze_render::integrators::transmittance_to;
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
@@ -114,9 +114,6 @@ pub(crate) fn surface_vpls(set: &LightSet) -> Vec<crate::vpl::SurfaceVpl> {
     set.surface_vpls.iter().map(|r| r.to_surface_vpl()).collect()
 }
 
-/// Index offset of surface VPLs in `light_uniforms`, so that they draw numbers of their own.
-pub(crate) const SURFACE_VPL_STREAM: u32 = 0x8000_0000;
-
 /// The surface VPLs' light at a camera segment (T12c) and at a gathering point (T12d).
 pub(crate) fn surface_vpls_to_segment(
     scene: &Scene,
@@ -134,7 +131,7 @@ pub(crate) fn surface_vpls_to_segment(
 }
 
 /// Surface VPL `vpl` (index `i` of its pass) -> camera segment (T12c), with its own random
-/// number from `key` (`SURFACE_VPL_STREAM`): the brute-force sum and the lightcut integrators'
+/// number from `key` (`SURFACE_VPL_INDEX`): the brute-force sum and the lightcut integrators'
 /// power-sampled sum evaluate the same term.
 #[inline]
 pub(crate) fn surface_vpl_to_segment(
@@ -150,7 +147,7 @@ pub(crate) fn surface_vpl_to_segment(
         return haze_core::Rgb::ZERO;
     }
     if crate::hetero::any(scene) {
-        let u = light_uniforms(key, SURFACE_VPL_STREAM | i as u32);
+        let u = light_uniforms(key, SURFACE_VPL_INDEX | i as u32);
         return crate::hetero::surface_vpl_to_segment(scene, vpl, cs, cam_medium, u, clamp);
     }
     let bsdf = &scene.shapes[vpl.shape as usize].bsdf;
@@ -159,7 +156,7 @@ pub(crate) fn surface_vpl_to_segment(
         cam_medium,
         vpl.p,
         |w| vpl.intensity(bsdf, w),
-        light_uniforms(key, SURFACE_VPL_STREAM | i as u32).x,
+        light_uniforms(key, SURFACE_VPL_INDEX | i as u32).x,
         clamp,
         |_, x| connect_surface(scene, vpl, x),
     )
@@ -230,7 +227,8 @@ pub(crate) fn medium_vpl_to_point(
 /// of floating-point additions).
 #[inline]
 pub(crate) fn light_uniforms(key: u64, light: u32) -> glam::Vec2 {
-    let h = haze_core::rng::mix64(key ^ haze_core::rng::mix64(light as u64 ^ 0x1f3d_5b79_a2c4_e6f1));
+    let h =
+        haze_core::rng::mix64(key ^ haze_core::rng::mix64(light as u64 ^ haze_core::streams::LIGHT_UNIFORMS));
     let scale = 1.0 / (1u32 << 24) as f32;
     glam::Vec2::new((h >> 40) as f32 * scale, ((h >> 8) & 0xff_ffff) as f32 * scale)
 }

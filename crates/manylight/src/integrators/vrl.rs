@@ -24,22 +24,32 @@ pub struct VrlIntegrator {
     settings: ManyLightSettings,
     /// `Some(c)`: clamp the `1/d^2` of surface-VPL connections at `c` (biased).
     pub clamp: Option<f32>,
-    /// Scale of the virtual lights' light at gathering surface points (VRL -> surface point and
-    /// surface VPL -> surface point): 1, except in the negative control of the whole-image
-    /// z-test (`crates/manylight/tests/integrators.rs`), which must fail when it is off.
-    #[doc(hidden)]
-    pub gather_point_scale: f32,
-    /// Scale of the caustic paths' splats (`crate::splat`): 1, except in the negative control
-    /// of the test that compares them with the camera continuation (1.2 must fail).
-    #[doc(hidden)]
-    pub caustic_scale: f32,
+    controls: TestControls,
     caustics: Option<CausticTracer>,
-    /// `gather::Gather::split`: `Some(1)`, except in the tests of the split.
-    #[doc(hidden)]
-    pub split: Option<f32>,
     tracer: PassTracer,
     /// Camera segment x VRL evaluations so far (for `haze bench`).
     evaluations: AtomicU64,
+}
+
+/// Changes of `vrl`'s estimate that only tests make (`crates/manylight/tests/integrators.rs`):
+/// the negative controls, which must fail, and the unsplit walk the split is compared with.
+/// `TestControls::default()` is the estimator, what [`VrlIntegrator::new`] renders with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TestControls {
+    /// Scale of the virtual lights' light at gathering surface points (VRL -> surface point and
+    /// surface VPL -> surface point): 1; off (0) must fail the whole-image z-test.
+    pub gather_point_scale: f32,
+    /// Scale of the caustic paths' splats (`crate::splat`): 1; 1.2 must fail the comparison
+    /// with the camera continuation.
+    pub caustic_scale: f32,
+    /// `gather::Gather::split`: `Some(1)`; `None` is the unsplit walk.
+    pub split: Option<f32>,
+}
+
+impl Default for TestControls {
+    fn default() -> Self {
+        TestControls { gather_point_scale: 1.0, caustic_scale: 1.0, split: Some(1.0) }
+    }
 }
 
 /// The VRLs of one pass in the two groups of `gather::Gather::segment` (medium-only, after a
@@ -56,15 +66,23 @@ pub struct VrlPass {
 impl VrlIntegrator {
     /// Fails if an emitter cannot start light paths (`constant`).
     pub fn new(scene: &Scene, settings: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
+        Self::with_test_controls(scene, settings, seed, TestControls::default())
+    }
+
+    /// [`VrlIntegrator::new`] with the estimate changed as `controls` says (tests only).
+    pub fn with_test_controls(
+        scene: &Scene,
+        settings: ManyLightSettings,
+        seed: u64,
+        controls: TestControls,
+    ) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &settings, seed)?;
         let caustics = caustic_tracer(scene, &settings);
         Ok(VrlIntegrator {
             settings,
             clamp: None,
-            gather_point_scale: 1.0,
-            caustic_scale: 1.0,
+            controls,
             caustics,
-            split: Some(1.0),
             tracer: PassTracer::new(paths),
             evaluations: AtomicU64::new(0),
         })
@@ -92,10 +110,9 @@ impl Integrator for VrlIntegrator {
             .tracer
             .trace(scene, seed, pass, &self.settings.trace, |s| s.vrls.len() + s.surface_vpls.len());
         let groups = split_groups(&set.vrls, |r| r.after_surface, VrlRecord::to_vrl);
-        let splats = self
-            .caustics
-            .as_ref()
-            .map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass).scaled(self.caustic_scale));
+        let splats = self.caustics.as_ref().map_or_else(CameraSplats::default, |c| {
+            c.splats(scene, seed, pass).scaled(self.controls.caustic_scale)
+        });
         VrlPass {
             groups,
             surface_vpls: surface_vpls(&set),
@@ -168,7 +185,7 @@ impl Gather for VrlGather<'_> {
     }
 
     fn split(&self) -> Option<f32> {
-        self.integrator.split
+        self.integrator.controls.split
     }
 
     fn compensated_clamp(&self) -> Option<f32> {
@@ -201,7 +218,7 @@ impl Gather for VrlGather<'_> {
             &pass.surface_vpls,
             gp,
             self.integrator.clamp.or(self.compensated_clamp()),
-        )) * self.integrator.gather_point_scale
+        )) * self.integrator.controls.gather_point_scale
     }
 }
 

@@ -356,7 +356,8 @@ pub fn build_agglomerative<L: TreeLight>(lights: &[L], settings: &BuildSettings)
     // Step 3: agglomerative merge of the groups' roots (in Morton order of their groups).
     let mut scratch = PlocScratch::default();
     scratch.clusters.extend(roots.iter().map(|&r| Cluster::of(&nodes[r as usize], r)));
-    let root = ploc(&mut nodes, &mut scratch, settings.radius, settings.seed ^ 0x70b);
+    let root =
+        ploc(&mut nodes, &mut scratch, settings.radius, settings.seed ^ haze_core::streams::PLOC_ROOTS);
     LightTree { nodes, root }
 }
 

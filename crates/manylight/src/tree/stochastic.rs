@@ -415,7 +415,7 @@ pub fn stochastic_cut(
 ) -> u32 {
     let cut = select_cut(tree, importance, settings.cut_size, scratch);
     for &start in cut.iter() {
-        let mut rng = mix64(key ^ mix64(start as u64 ^ 0x5eed_c0de_d1ce_f00d));
+        let mut rng = mix64(key ^ mix64(start as u64 ^ haze_core::streams::CUT_NODE_DESCENT));
         let (light, prob) = sample_light(tree, start, importance, settings.power_share, &mut rng);
         if prob > 0.0 {
             evaluate(light, prob);

@@ -101,7 +101,7 @@ fn hetero_segment(
                 ray.d,
                 t0,
                 t1,
-                &mut Sampler::new(0x6865_7465_726f, key, t1.to_bits() as u64),
+                &mut Sampler::new(haze_core::streams::SHADOW_RATIO_TRACKING, key, t1.to_bits() as u64),
             )
         }
     }

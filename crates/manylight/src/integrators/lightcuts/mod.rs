@@ -15,10 +15,11 @@
 #[cfg(test)]
 mod bound_tests;
 mod kinds;
-pub mod probe;
+mod observer;
 mod surface;
 
 pub use kinds::{ClusterKind, Vpls, Vrls};
+pub use observer::{CutObserver, Observed, SegmentCut};
 
 use super::{
     caustic_tracer, light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment,
@@ -40,6 +41,7 @@ use crate::tree::stochastic::{
 use crate::tree::{LightTree, Node};
 use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
+use haze_core::streams::{LIGHT_SAMPLES, POINT_CUT, SEGMENT_CUT, SURFACE_VPL_CUT, TREE_SEEDS};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_render::{Integrator, PathRadiance};
 use haze_scene::lights::EmissionError;
@@ -272,10 +274,10 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let splats =
             self.caustics.as_ref().map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass));
         let n = a.len() + b.len() + surface_vpls.len();
-        let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ 1)];
+        let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ TREE_SEEDS[0])];
         let surface_tree = {
             let summaries: Vec<LightSummary> = surface_vpls.iter().map(surface_vpl_summary).collect();
-            SampleTree::new(&self.build_tree(&summaries, tree_seed ^ 2))
+            SampleTree::new(&self.build_tree(&summaries, tree_seed ^ TREE_SEEDS[1]))
         };
         let sigma_mean = if media.is_empty() {
             0.0
@@ -331,7 +333,8 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        whole_path_radiance(scene, ray, medium, sampler, &LightcutGather { integrator: self, scene, pass })
+        let gather = LightcutGather { integrator: self, scene, pass, observer: &() };
+        whole_path_radiance(scene, ray, medium, sampler, &gather)
     }
 
     fn summary(&self) -> Option<String> {
@@ -444,6 +447,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         cs: &CameraSegment,
         key: u64,
         group: usize,
+        observer: &impl CutObserver<K>,
     ) -> Rgb {
         let forest = &pass.forests[group];
         if forest.tree.is_empty() {
@@ -463,7 +467,7 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                 };
                 let mut sum = Rgb::ZERO;
                 let light_samples = self.settings.stochastic.light_samples;
-                let descent_key = key ^ 0xa5a5_5a5a_0f0f_f0f0u64.wrapping_mul(group as u64 + 1);
+                let descent_key = key ^ SEGMENT_CUT.wrapping_mul(group as u64 + 1);
                 let size = stochastic_cut(
                     &forest.sample,
                     &importance,
@@ -481,16 +485,21 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                             let kj = if j == 0 {
                                 key
                             } else {
-                                haze_core::rng::mix64(key ^ j.wrapping_mul(SAMPLE_STREAM))
+                                haze_core::rng::mix64(key ^ j.wrapping_mul(LIGHT_SAMPLES))
                             };
                             sum += K::contribution(scene, cs, &pass.media, l, kj, light) * weight;
                         }
                     },
                 );
-                if probe::probed(key) {
-                    let share = self.settings.stochastic.power_share;
-                    probe::record::<K>(scene, pass, cs, key, forest, &importance, share);
-                }
+                observer.stochastic_cut(&SegmentCut {
+                    scene,
+                    media: &pass.media,
+                    cs,
+                    key,
+                    forest,
+                    importance: &importance,
+                    power_share: self.settings.stochastic.power_share,
+                });
                 if PROBING.get() {
                     let (mut total, mut largest) = (0.0f64, 0.0f64);
                     for &n in scratch.cut() {
@@ -518,27 +527,20 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
 }
 
 /// The lightcut integrator's side of the camera walk (`gather.rs`).
-struct LightcutGather<'a, K: ClusterKind> {
+struct LightcutGather<'a, K: ClusterKind, O> {
     integrator: &'a LightcutsIntegrator<K>,
     scene: &'a Scene,
     pass: &'a LightcutPass<K>,
+    observer: &'a O,
 }
 
-/// Separates the numbers of a sampled light's further joint samples (`light_samples`).
-const SAMPLE_STREAM: u64 = 0x3c6e_f372_fe94_f82b;
-
-/// Separate the descents of the surface VPL tree for camera segments and of the trees for
-/// gathering points from each other and from the lights' own numbers (`light_uniforms`).
-const SURFACE_STREAM: u64 = 0x7a3c_91e5_d04b_26f8;
-const POINT_STREAM: u64 = 0x51ed_2705_a3c1_9e4d;
-
-impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
+impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
     fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
         let (scene, pass) = (self.scene, self.pass);
-        let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g));
+        let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g, self.observer));
         let cam_medium = &pass.media[cs.medium as usize];
         let ctx = ImportanceContext::new(cs.seg, cam_medium);
-        let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_STREAM, |i| {
+        let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_VPL_CUT, |i| {
             surface_vpl_to_segment(
                 scene,
                 &pass.surface_vpls[i as usize],
@@ -581,7 +583,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
             return Rgb::ZERO;
         }
         let prob = |g: usize| mixed_probability(imp[g], imp_sum, pow[g] / pow_sum, share);
-        let u = light_uniforms(key ^ POINT_STREAM, 0).x;
+        let u = light_uniforms(key ^ POINT_CUT, 0).x;
         // Falls back to the last tree with power if rounding leaves `u` above the sum.
         let mut g = pow.iter().rposition(|&p| p > 0.0).unwrap_or(2);
         let mut acc = 0.0;
@@ -596,7 +598,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
         if p_tree <= 0.0 {
             return Rgb::ZERO;
         }
-        let stream = POINT_STREAM.wrapping_mul(g as u64 + 2);
+        let stream = POINT_CUT.wrapping_mul(g as u64 + 2);
         let sum = if g < 2 {
             let forest = &pass.forests[g];
             let importance = |n: &SampleNode| {
@@ -619,7 +621,7 @@ impl<K: ClusterKind> Gather for LightcutGather<'_, K> {
     }
 }
 
-impl<K: ClusterKind> LightcutGather<'_, K> {
+impl<K: ClusterKind, O> LightcutGather<'_, K, O> {
     /// The stochastic cut's estimate (`cut_size` nodes, one light each) of the sum of `eval`
     /// over the lights of `tree`, descending with `importance` and the numbers of `key`.
     fn cut_sum(

@@ -11,22 +11,20 @@
 //!
 //! reported for the tree's descent from the root (`k = 1`), for probabilities proportional to
 //! power alone, and for probabilities proportional to each leaf's own importance (the tree's
-//! structure taken out). Off unless [`set_selection_probe`] turned it on: then one atomic load
-//! per segment.
+//! structure taken out). [`SelectionProbe`] watches the cuts of a render through
+//! `haze_manylight::integrators::Observed`, so the shipped integrator has no check of its own
+//! on the hot path.
 
-use super::{ClusterKind, Forest, LightcutPass};
-use crate::camera::CameraSegment;
-use crate::tree::stochastic::{light_probabilities, power as tree_power, SampleNode};
 use haze_core::rng::mix64;
-use haze_scene::Scene;
-use std::sync::atomic::{AtomicU64, Ordering};
+use haze_manylight::integrators::{ClusterKind, CutObserver, SegmentCut};
+use haze_manylight::tree::stochastic::{light_probabilities, power as tree_power};
 use std::sync::Mutex;
 
 /// Joint samples averaged per light for its mean contribution.
 pub const PROBE_SAMPLES: u64 = 16;
 
-static EVERY: AtomicU64 = AtomicU64::new(0);
-static RECORDS: Mutex<Vec<SelectionRecord>> = Mutex::new(Vec::new());
+/// Separates the probe's choice of segments from every stream of the image.
+const PROBE_STREAM: u64 = 0x7072_6f62_6570_726f;
 
 /// One probed camera segment and tree.
 #[derive(Clone, Copy, Debug)]
@@ -47,21 +45,33 @@ pub struct SelectionRecord {
     pub joint_all: f64,
 }
 
-/// Probe about one camera segment in `every` (by a hash of its key); 0 turns the probe off.
-pub fn set_selection_probe(every: u64) {
-    EVERY.store(every, Ordering::Relaxed);
+/// Records one camera segment in `every` (by a hash of its key) into
+/// [`SelectionProbe::take_records`]; render with `Observed { integrator, observer: &probe }`.
+pub struct SelectionProbe {
+    every: u64,
+    records: Mutex<Vec<SelectionRecord>>,
 }
 
-/// The records so far, emptying the store.
-pub fn take_selection_records() -> Vec<SelectionRecord> {
-    std::mem::take(&mut *RECORDS.lock().unwrap_or_else(|e| e.into_inner()))
+impl SelectionProbe {
+    /// `every` is at least 1.
+    pub fn new(every: u64) -> Self {
+        SelectionProbe { every: every.max(1), records: Mutex::new(Vec::new()) }
+    }
+
+    /// The records so far, emptying the store.
+    pub fn take_records(&self) -> Vec<SelectionRecord> {
+        std::mem::take(&mut *self.records.lock().unwrap_or_else(|e| e.into_inner()))
+    }
 }
 
-/// Whether the segment with `key` is probed.
-#[inline]
-pub(super) fn probed(key: u64) -> bool {
-    let every = EVERY.load(Ordering::Relaxed);
-    every != 0 && mix64(key ^ 0x7072_6f62_6570_726f) % every == 0
+impl<K: ClusterKind> CutObserver<K> for SelectionProbe {
+    fn stochastic_cut(&self, cut: &SegmentCut<'_, K>) {
+        if mix64(cut.key ^ PROBE_STREAM) % self.every == 0 {
+            if let Some(r) = record(cut) {
+                self.records.lock().unwrap_or_else(|e| e.into_inner()).push(r);
+            }
+        }
+    }
 }
 
 /// `V(p)` of the module docs for unnormalised weights `w` (infinite if a contributing light
@@ -80,15 +90,9 @@ fn relative_variance(c: &[f64], w: &[f64]) -> f64 {
     v / (sum * sum) - 1.0
 }
 
-pub(super) fn record<K: ClusterKind>(
-    scene: &Scene,
-    pass: &LightcutPass<K>,
-    cs: &CameraSegment,
-    key: u64,
-    forest: &Forest<K>,
-    importance: &impl Fn(&SampleNode) -> f32,
-    share: f32,
-) {
+/// The record of one stochastic cut (`None` when its lights contribute nothing).
+fn record<K: ClusterKind>(cut: &SegmentCut<'_, K>) -> Option<SelectionRecord> {
+    let SegmentCut { scene, media, cs, key, forest, importance, power_share: share } = *cut;
     let n = forest.lights.len();
     // Mean and sample variance of each light's contribution over PROBE_SAMPLES joint samples.
     let (c, var): (Vec<f64>, Vec<f64>) = forest
@@ -98,7 +102,7 @@ pub(super) fn record<K: ClusterKind>(
         .map(|(i, l)| {
             let (mut s1, mut s2) = (0.0, 0.0);
             for m in 0..PROBE_SAMPLES {
-                let v = K::contribution(scene, cs, &pass.media, l, mix64(key ^ (m + 1)), i as u32);
+                let v = K::contribution(scene, cs, media, l, mix64(key ^ (m + 1)), i as u32);
                 let x = (v[0] + v[1] + v[2]) as f64;
                 s1 += x;
                 s2 += x * x;
@@ -110,10 +114,10 @@ pub(super) fn record<K: ClusterKind>(
         .unzip();
     let sum: f64 = c.iter().sum();
     if !(sum > 0.0 && sum.is_finite()) {
-        return;
+        return None;
     }
     let mut tree = vec![0.0; n];
-    for (light, p) in light_probabilities(&forest.sample, 0, importance, share) {
+    for (light, p) in light_probabilities(&forest.sample, 0, &importance, share) {
         tree[light as usize] = p;
     }
     let (mut leaves, mut power) = (vec![0.0; n], vec![0.0; n]);
@@ -129,7 +133,7 @@ pub(super) fn record<K: ClusterKind>(
     }
     let joint_tree = var.iter().zip(&tree).map(|(&v, &p)| if v > 0.0 { v / p } else { 0.0 }).sum::<f64>();
     let joint_all = var.iter().sum::<f64>();
-    let r = SelectionRecord {
+    Some(SelectionRecord {
         lights: n,
         sum,
         tree: relative_variance(&c, &tree),
@@ -137,8 +141,7 @@ pub(super) fn record<K: ClusterKind>(
         leaves: relative_variance(&c, &leaves),
         joint_tree: joint_tree / (sum * sum),
         joint_all: joint_all / (sum * sum),
-    };
-    RECORDS.lock().unwrap_or_else(|e| e.into_inner()).push(r);
+    })
 }
 
 #[cfg(test)]

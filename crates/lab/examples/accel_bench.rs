@@ -4,7 +4,7 @@
 //! next-event estimation at a surface) to the same random points. For measuring traversal
 //! changes (docs/performance.md §1.4), not a test.
 //!
-//!     cargo run --release -p haze-scene --example accel_bench -- SCENE.xml [RAYS]
+//!     cargo run --release -p haze-lab --example accel_bench -- SCENE.xml [RAYS]
 
 use glam::Vec3;
 use haze_core::ray::offset_origin;

@@ -3,7 +3,7 @@
 //! expected number of density lookups of delta and ratio tracking) along random rays through the
 //! medium's box, then volpath's render time at equal spp with each.
 //!
-//! `cargo run --release -p haze-render --example majorant_probe -- SCENE.xml... [--spp N]`
+//! `cargo run --release -p haze-lab --example majorant_probe -- SCENE.xml... [--spp N]`
 
 use haze_core::{Rgb, Sampler};
 use haze_render::progressive::{render_volpath, RenderSettings};

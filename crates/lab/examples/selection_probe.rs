@@ -1,8 +1,8 @@
 //! How much variance the stochastic cut's light selection adds, per scene (docs/lightcuts.md,
-//! "Choosing the importance"; `haze_manylight::integrators::selection_probe`).
+//! "Choosing the importance"; `haze_lab::selection`).
 //!
 //! ```text
-//! cargo run --release -p haze-manylight --example selection_probe -- SCENE.xml... \
+//! cargo run --release -p haze-lab --example selection_probe -- SCENE.xml... \
 //!     [--vrls 1000] [--every 150] [--width 96] [--spp 2] [--share 0.1]
 //! ```
 //!
@@ -13,20 +13,16 @@
 //! probabilities, averaged over the probed segments weighted by their squared sum (the share of
 //! the image's variance), and its median. `--share` sets the descent's power share `a`.
 
-use haze_manylight::integrators::selection_probe::{
-    set_selection_probe, take_selection_records, SelectionRecord,
-};
-use haze_manylight::integrators::{
-    LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, Vrls,
-};
-use haze_manylight::lighttrace::LightTraceSettings;
+use haze_engine::options::MethodKind;
+use haze_lab::selection::{SelectionProbe, SelectionRecord};
+use haze_lab::setup;
+use haze_manylight::integrators::Observed;
 use haze_render::progressive::{render, RenderSettings};
-use haze_scene::{load_file, LoadOptions};
 use std::sync::atomic::AtomicBool;
 
 fn main() {
     let (mut scenes, mut vrls, mut every, mut width, mut spp) = (Vec::new(), 1000u64, 150u64, 96u32, 2u32);
-    let mut settings = LightcutSettings::default();
+    let mut share = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = |name: &str| -> u64 {
@@ -40,8 +36,8 @@ fn main() {
             "--spp" => spp = value("--spp").max(1) as u32,
             "--share" => {
                 let v = args.next().unwrap_or_else(|| fail("--share needs a value"));
-                settings.stochastic.power_share = match v.parse::<f32>() {
-                    Ok(a) if a > 0.0 && a <= 1.0 => a,
+                share = match v.parse::<f32>() {
+                    Ok(a) if a > 0.0 && a <= 1.0 => Some(a),
                     _ => fail(&format!("--share: not in (0, 1]: {v}")),
                 };
             }
@@ -55,19 +51,20 @@ fn main() {
     println!("| scene | segments | tree (k = 1) | power only | leaves | tree, median | joint, tree | joint, all lights |");
     println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     for path in scenes {
-        let mut scene = load_file(std::path::Path::new(&path), &LoadOptions::default())
-            .unwrap_or_else(|e| fail(&format!("{e}")));
+        let mut scene =
+            setup::load_scene(std::path::Path::new(&path), &[]).unwrap_or_else(|e| fail(&format!("{e:#}")));
         let aspect = scene.camera.height as f32 / scene.camera.width as f32;
         scene.camera.width = width;
         scene.camera.height = ((width as f32 * aspect).round() as u32).max(1);
-        let ml = ManyLightSettings {
-            budget: LightBudget::Vrls(vrls),
-            trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
-            caustic_paths: None,
-            compensated_clamp: None,
-        };
-        let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, settings, 0)
-            .unwrap_or_else(|e| fail(&format!("{path}: {e}")));
+        // The power share is the probe's own knob, not an option of haze render.
+        let vrls = vrls.to_string();
+        let mut options = setup::options(MethodKind::VrlLightcuts, &[("vrls", &vrls)])
+            .unwrap_or_else(|e| fail(&format!("{e:#}")));
+        if let Some(a) = share {
+            options.method.lightcuts.stochastic.power_share = a;
+        }
+        let integrator =
+            setup::vrl_lightcuts(&scene, &options).unwrap_or_else(|e| fail(&format!("{path}: {e:#}")));
         let settings = RenderSettings {
             spp,
             seed: 0,
@@ -77,10 +74,10 @@ fn main() {
             first_pass: 0,
             sampler: Default::default(),
         };
-        set_selection_probe(every);
-        render(&scene, &integrator, &settings, &AtomicBool::new(false), |_| {});
-        set_selection_probe(0);
-        let records = take_selection_records();
+        let probe = SelectionProbe::new(every);
+        let observed = Observed { integrator: &integrator, observer: &probe };
+        render(&scene, &observed, &settings, &AtomicBool::new(false), |_| {});
+        let records = probe.take_records();
         let weighted = |f: fn(&SelectionRecord) -> f64| {
             let w: f64 = records.iter().map(|r| r.sum * r.sum).sum();
             records.iter().map(|r| f(r) * r.sum * r.sum).sum::<f64>() / w
