@@ -329,12 +329,8 @@ fn walk(
         }
         chain.clear();
         st.gathering = delta_lobe;
-        if st.events > RR_EVENTS {
-            let q = st.beta.max_component().min(0.95);
-            if sampler.next_1d() >= q {
-                return;
-            }
-            st.beta /= q;
+        if !survives_roulette(&mut st, sampler) {
+            return;
         }
         if st.beta.is_black() {
             return;
@@ -458,12 +454,8 @@ fn walk_chain(
             st.skip_area_emitters = skip_area_emitters;
             st.after_rough = true;
             st.direct = false;
-            if st.events > RR_EVENTS {
-                let q = st.beta.max_component().min(0.95);
-                if sampler.next_1d() >= q {
-                    return ChainEnd::Stop;
-                }
-                st.beta /= q;
+            if !survives_roulette(st, sampler) {
+                return ChainEnd::Stop;
             }
             continue;
         }
@@ -501,15 +493,24 @@ fn walk_chain(
         if st.events >= max_events {
             return ChainEnd::Stop;
         }
-        if st.events > RR_EVENTS {
-            let q = st.beta.max_component().min(0.95);
-            if sampler.next_1d() >= q {
-                return ChainEnd::Stop;
-            }
-            st.beta /= q;
+        if !survives_roulette(st, sampler) {
+            return ChainEnd::Stop;
         }
     }
     ChainEnd::Stop
+}
+
+/// Russian roulette after [`RR_EVENTS`] events: the walk survives with probability
+/// `q = min(max(beta), 0.95)` and its throughput is divided by `q`; false if it ends.
+fn survives_roulette(st: &mut Walk, sampler: &mut Sampler) -> bool {
+    if st.events > RR_EVENTS {
+        let q = st.beta.max_component().min(0.95);
+        if sampler.next_1d() >= q {
+            return false;
+        }
+        st.beta /= q;
+    }
+    true
 }
 
 /// The largest f32 below 1.
