@@ -21,6 +21,7 @@ pub mod sampling;
 pub mod spectrum;
 pub mod streams;
 pub mod transmittance;
+pub mod walk;
 
 pub use frame::Frame;
 pub use glam::{Mat4, Vec2, Vec3};

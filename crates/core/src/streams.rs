@@ -3,10 +3,6 @@
 //! every other use of the same key. The values are part of every image (changing one changes
 //! the images whose stream it salts); a new stream takes a salt of its own, different from all
 //! below.
-//!
-//! Two streams keep their salts beside their only user for now: the light paths
-//! (`haze-manylight`'s `lighttrace.rs`: `LIGHT_STREAM` and the pilot run's salt) and the ratio
-//! tracking of the many-light estimators (`hetero.rs`: `TRACK_STREAM`).
 
 // Samplers (`crate::rng`, `crate::sampler`).
 
@@ -33,6 +29,17 @@ pub const PATTERN_SCRAMBLE: [u64; 2] = [0x48bc_48eb, 0x98bc_51ab];
 pub const SHADOW_RATIO_TRACKING: u64 = 0x6865_7465_726f;
 
 // Virtual lights (`haze-manylight`).
+
+/// Light paths (`lighttrace.rs`): `Sampler::new(seed ^ it, path, pass)`, apart from the camera
+/// paths of the same seed.
+pub const LIGHT_STREAM: u64 = 0x005e_ed11_c7a1_17e5;
+/// The pilot run that finds how many light paths make the requested VRL count
+/// (`lighttrace.rs`, `paths_for_vrl_count`): its paths are traced with `seed ^ it`, apart from
+/// the pass's own.
+pub const LIGHT_PILOT: u64 = 0x9170_7000;
+/// The ratio tracking of one light evaluation in a heterogeneous medium (`hetero.rs`,
+/// `tracker`): `Sampler::new(it, uniforms, light salt)`, apart from every other stream.
+pub const TRACK_STREAM: u64 = 0x7261_7469_6f5f_7472;
 
 /// The caustic paths' samplers (`splat.rs`): `Sampler::new(seed ^ it, path, pass)`.
 pub const CAUSTIC_PATHS: u64 = 0x5b1a_7c0f_fee0_0001;

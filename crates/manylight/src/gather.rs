@@ -375,7 +375,7 @@ fn walk_chain(
     if st.events >= max_events {
         return ChainEnd::Stop;
     }
-    for _ in 0..10_000 {
+    for _ in 0..haze_core::walk::MAX_CHAIN_VERTICES {
         let hit = scene.intersect(&st.ray);
         let len = hit.map_or(st.ray.t_max, |h| h.t);
         if let Some(m) = st.medium {
@@ -501,13 +501,13 @@ fn walk_chain(
 }
 
 /// Russian roulette after [`RR_EVENTS`] events: the walk survives with probability
-/// `q = min(max(beta), 0.95)` and its throughput is divided by `q`; false if it ends.
+/// `q = min(max(beta), 0.95)` and its throughput is divided by `q` (`haze_core::walk`); false if
+/// it ends.
 fn survives_roulette(st: &mut Walk, sampler: &mut Sampler) -> bool {
     if st.events > RR_EVENTS {
-        let q = st.beta.max_component().min(0.95);
-        if sampler.next_1d() >= q {
+        let Some(q) = haze_core::walk::roulette(st.beta.max_component(), sampler.next_1d()) else {
             return false;
-        }
+        };
         st.beta /= q;
     }
     true

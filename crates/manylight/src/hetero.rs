@@ -29,6 +29,7 @@ use crate::vrl::estimator::{connection_direction, contributes, point_pair_estima
 use crate::vrl::sampling::{Equiangular, VrlPointSampler};
 use crate::vrl::{Segment, Vrl, VrlMedium};
 use glam::{Vec2, Vec3};
+use haze_core::streams::TRACK_STREAM;
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
 use haze_scene::hetero::Heterogeneous;
@@ -40,9 +41,6 @@ use haze_scene::{MediumId, Scene};
 pub(crate) fn any(scene: &Scene) -> bool {
     scene.media.iter().any(|m| !m.is_homogeneous())
 }
-
-/// Separates the ratio-tracking streams of light evaluations from every other stream.
-const TRACK_STREAM: u64 = 0x7261_7469_6f5f_7472;
 
 /// The random numbers of one light evaluation's ratio tracking, from the uniform numbers that
 /// sample its points and a salt of the light (so that two lights with equal numbers still track

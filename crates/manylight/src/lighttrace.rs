@@ -36,6 +36,7 @@
 
 use glam::Vec3;
 use haze_core::ray::offset_origin;
+use haze_core::streams::{LIGHT_PILOT, LIGHT_STREAM};
 use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_scene::hetero::Flight;
@@ -240,9 +241,6 @@ pub fn trace_light_paths(
     Ok(out)
 }
 
-/// Separates light-path random streams from camera-path streams with the same seed.
-const LIGHT_STREAM: u64 = 0x005e_ed11_c7a1_17e5;
-
 /// Number of light paths that yields about `target` VRLs, from a pilot of `pilot` paths traced
 /// with a stream of its own. Fixing the path count in advance (rather than stopping once
 /// `target` VRLs exist) keeps the estimate unbiased: a data-dependent stopping rule would not.
@@ -253,7 +251,7 @@ pub fn paths_for_vrl_count(
     settings: &LightTraceSettings,
 ) -> Result<u64, EmissionError> {
     let pilot = 2000u64;
-    let set = trace_light_paths(scene, pilot, seed ^ 0x9170_7000, u32::MAX, settings)?;
+    let set = trace_light_paths(scene, pilot, seed ^ LIGHT_PILOT, u32::MAX, settings)?;
     let per_path = set.vrls.len() as f64 / pilot as f64;
     if per_path == 0.0 {
         return Ok(target.max(1));
@@ -297,7 +295,7 @@ fn trace_one(
     let mut after_surface = false;
     let max_len = scene_extent(scene) * 4.0;
 
-    for _ in 0..100_000 {
+    for _ in 0..haze_core::walk::MAX_LIGHT_PATH_VERTICES {
         let hit = scene.intersect(&ray);
         let t_surface = hit.map_or(f32::INFINITY, |h| h.t);
         if let Some(m) = medium {
@@ -450,7 +448,8 @@ fn scatter(
     true
 }
 
-/// Russian roulette on the relative throughput `t / mean(r)` once `events > rr_events`.
+/// Russian roulette (`haze_core::walk`) on the relative throughput `t / mean(r)` once
+/// `events > rr_events`.
 fn survives_roulette(
     s: &mut Sampler,
     t: &mut Rgb,
@@ -461,10 +460,9 @@ fn survives_roulette(
     if events <= settings.rr_events {
         return true;
     }
-    let q = (*t / r.mean()).max_component().min(0.95);
-    if s.next_1d() >= q {
+    let Some(q) = haze_core::walk::roulette((*t / r.mean()).max_component(), s.next_1d()) else {
         return false;
-    }
+    };
     *t /= q;
     true
 }

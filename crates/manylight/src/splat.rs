@@ -346,7 +346,7 @@ impl CausticTracer {
         // As light tracing caps its VRLs in an unbounded medium.
         let max_len = self.max_len;
         let mut events = 0;
-        for _ in 0..10_000 {
+        for _ in 0..haze_core::walk::MAX_CHAIN_VERTICES {
             let hit = scene.intersect(&ray);
             if let Some(m) = medium {
                 let med = scene.medium(m);

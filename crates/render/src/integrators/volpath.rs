@@ -11,7 +11,8 @@
 //!   vertex the depth allows adds only what it emits: no NEE, and no BSDF sample unless the
 //!   BSDF may pass light through (thin glass: not an event), since its direction would not be
 //!   followed.
-//! - Russian roulette once `depth > rr_depth`, survival `q = min(max(throughput) eta^2, 0.95)`.
+//! - Russian roulette once `depth > rr_depth`, survival `q = min(max(throughput) eta^2, 0.95)`
+//!   (`haze_core::walk`, shared by every walker).
 //! - Media change only at shapes that declare an interior or exterior medium.
 //! - Emitters are sampled uniformly; NEE and phase/BSDF sampling are combined with the power
 //!   heuristic; emitters hit directly by the camera or after a specular chain count fully.
@@ -90,10 +91,8 @@ impl Integrator for VolPath {
 
         loop {
             if depth > self.rr_depth {
-                let q = ((beta / r.mean()).max_component() * eta * eta).min(0.95);
-                if sampler.next_1d() >= q {
-                    break;
-                }
+                let m = (beta / r.mean()).max_component() * eta * eta;
+                let Some(q) = haze_core::walk::roulette(m, sampler.next_1d()) else { break };
                 beta /= q;
             }
             if depth >= max_depth || beta.is_black() {
