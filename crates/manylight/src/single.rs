@@ -550,7 +550,7 @@ mod tests {
         let seg = Segment::new(Vec3::new(-0.9, 0.0, 0.9), Vec3::X, 1.9);
         let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE, events: 0 };
         let (exact, mitsuba) = (0.130676, 0.074041);
-        let estimate = mean_and_error(&scene, &cs, 13, 400_000);
+        let estimate = mean_and_error(&scene, &cs, 13, 1_600_000);
         for (c, &(mean, se)) in estimate.iter().enumerate() {
             let z = |value: f64| (mean - value) / se;
             println!("channel {c}: single scattering {mean:.6} +- {se:.6}, quadrature {exact}");
