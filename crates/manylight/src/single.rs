@@ -517,4 +517,46 @@ mod tests {
             }
         }
     }
+
+    /// Single scattering from an area light 0.01 beyond the fog's `null` boundary, the minimal
+    /// configuration of `docs/validation.md` (`homo_emitter_inside_medium`;
+    /// `scripts/validation/emitter_beyond_null_boundary.xml`), along the segment every point of
+    /// which lies 0.11 below the light's plane: every shadow ray crosses the boundary just
+    /// before its light point. The exact value 0.130676 is the f64 quadrature of
+    /// `haze-render`'s `tests/analytic.rs` (`single_scattering_under_the_light`), which
+    /// `scripts/validation/emitter_inside_medium.py` reproduces with numpy (Gauss-Legendre and
+    /// Monte Carlo). Controls rejected by the same `|z| < 4.5`: Mitsuba 3.9.1's value there
+    /// (0.074041 +- 0.000223, its shadow rays blocking their own light samples) and 1% too high.
+    #[test]
+    fn area_light_beyond_a_null_boundary_matches_quadrature() {
+        let xml = r#"<scene version="3.0.0">
+            <medium type="homogeneous" id="fog">
+                <rgb name="sigma_t" value="1, 1, 1"/><float name="albedo" value="0.9"/>
+            </medium>
+            <sensor type="perspective">
+                <transform name="to_world"><lookat origin="-0.9, 0, 0.9" target="1, 0, 0.9" up="0, 0, 1"/></transform>
+                <ref id="fog"/>
+                <film type="hdrfilm"><integer name="width" value="2"/><integer name="height" value="2"/></film>
+            </sensor>
+            <shape type="cube"><bsdf type="null"/><ref id="fog" name="interior"/></shape>
+            <shape type="rectangle">
+                <boolean name="flip_normals" value="true"/>
+                <transform name="to_world"><scale value="0.5"/><translate z="1.01"/></transform>
+                <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+                <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+            </shape>
+        </scene>"#;
+        let scene = load_str(xml, Path::new("beyond.xml"), Path::new("."), &LoadOptions::default()).unwrap();
+        let seg = Segment::new(Vec3::new(-0.9, 0.0, 0.9), Vec3::X, 1.9);
+        let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE, events: 0 };
+        let (exact, mitsuba) = (0.130676, 0.074041);
+        let estimate = mean_and_error(&scene, &cs, 13, 1_600_000);
+        for (c, &(mean, se)) in estimate.iter().enumerate() {
+            let z = |value: f64| (mean - value) / se;
+            println!("channel {c}: single scattering {mean:.6} +- {se:.6}, quadrature {exact}");
+            assert!(z(exact).abs() < 4.5, "channel {c}: {mean} +- {se} vs {exact} (z {:.2})", z(exact));
+            assert!(z(mitsuba).abs() >= 4.5, "control: Mitsuba's {mitsuba} accepted");
+            assert!(z(1.01 * exact).abs() >= 4.5, "control: 1% too high accepted ({mean} +- {se})");
+        }
+    }
 }

@@ -21,19 +21,24 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 /// `n_start` is the geometric normal at `p` when `p` is on a surface (used to offset the origin),
 /// `None` in a medium.
 ///
-/// For a finite `dist` every segment is aimed from its (offset) origin `o` at the target
+/// For a finite `dist` the ray is aimed from its (offset) origin `o` at the target
 /// `y = p + dist d` and ends at `|y - o| (1 - SHADOW_EPSILON)`: Mitsuba 3's
-/// `Interaction::spawn_ray_to` (`d = normalize(y - o)`, `maxt = |y - o| (1 - ShadowEpsilon)`),
-/// which its volpath also uses after each null crossing. Keeping `d` instead would run the ray
-/// parallel to `p y`, displaced by the origin offset `eps n_s`; it then meets the plane of the
-/// emitter's own triangle (normal `n_l`) at `dist - eps (n_l . n_s) / (n_l . d)`, which for a
-/// light seen at a grazing angle (`n_l . d` small) lies before any relative shortening, so the
-/// light occluded itself (issue 8: up to 40% too dark next to an angled area light).
+/// `Interaction::spawn_ray_to` (`d = normalize(y - o)`, `maxt = |y - o| (1 - ShadowEpsilon)`).
+/// Keeping `d` instead would run the ray parallel to `p y`, displaced by the origin offset
+/// `eps n_s`; it then meets the plane of the emitter's own triangle (normal `n_l`) at
+/// `dist - eps (n_l . n_s) / (n_l . d)`, which for a light seen at a grazing angle (`n_l . d`
+/// small) lies before any relative shortening, so the light occluded itself (issue 8: up to 40%
+/// too dark next to an angled area light).
 ///
 /// The ray is traced once ([`Scene::shadow_hits`]: any blocker ends it, pass-through surfaces
-/// are collected and crossed in order along the same line), so after a null crossing the ray
-/// keeps the direction aimed at `y` from the first origin rather than being re-aimed from an
-/// offset origin; the segment lengths then sum to exactly `|y - o| (1 - SHADOW_EPSILON)`.
+/// are collected and crossed in order along the same line), so no crossing moves it: it ends
+/// where it was aimed, `|y - o| SHADOW_EPSILON` before the light, however many null or thin
+/// surfaces it crosses. Mitsuba 3's volpath does not: after each crossing its `sample_emitter`
+/// continues from the crossing point offset along the surface's normal (`spawn_ray`, the same
+/// direction) with the length left, so its last ray ends displaced by the summed offsets, past
+/// a light closer than about `(1 + |p|) / 10` behind the boundary (along the light's normal),
+/// and the light blocks its own sample. That loss is Mitsuba's part of `homo_emitter_inside_medium`
+/// (`docs/validation.md`); `tests/analytic.rs` checks haze against quadrature there.
 ///
 /// Heterogeneous media have no deterministic transmittance: their segments are estimated by
 /// ratio tracking with a sampler seeded from the ray (unbiased per query; prefer
