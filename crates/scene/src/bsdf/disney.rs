@@ -112,13 +112,7 @@ pub struct DiffuseParams {
 /// Hanrahan-Krueger approximation `1.25 (Fss (1/(cos_o + cos_i) - 1/2) + 1/2)`,
 /// `Fss = (1 + (Fss90 - 1) Fo)(1 + (Fss90 - 1) Fi)`, `Fss90 = Rr / 2` (Burley 2012, Appendix B).
 /// Sheen: `sheen Fd lerp(1, tint, sheen_tint)`, `Fd = schlick_weight(cos_d)` (Burley 2015, §3.1).
-pub fn diffuse_sheen(
-    p: &DiffuseParams,
-    base_color: Rgb,
-    cos_i: f32,
-    cos_o: f32,
-    cos_d: f32,
-) -> (f32, Rgb) {
+pub fn diffuse_sheen(p: &DiffuseParams, base_color: Rgb, cos_i: f32, cos_o: f32, cos_d: f32) -> (f32, Rgb) {
     let (fo, fi) = (schlick_weight(cos_o.abs()), schlick_weight(cos_i.abs()));
     let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
     let rr = 2.0 * p.roughness * cos_d * cos_d;

@@ -14,8 +14,7 @@
 
 use super::dielectric::fresnel_dielectric;
 use super::disney::{
-    compatible, diffuse_sheen, ggx, mulsign, reflect_about, schlick_fresnel, schlick_r0, tint,
-    DiffuseParams,
+    compatible, diffuse_sheen, ggx, mulsign, reflect_about, schlick_fresnel, schlick_r0, tint, DiffuseParams,
 };
 use super::microfacet::Microfacet;
 use super::BsdfSample;
