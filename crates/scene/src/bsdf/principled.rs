@@ -143,7 +143,7 @@ impl Principled {
             return None;
         }
         let (value, pdf) = self.eval_pdf(wi, wo, uv);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if pdf.is_nan() || pdf <= 0.0 || !pdf.is_finite() {
             return None;
         }
         let weight = value / pdf;
@@ -194,20 +194,20 @@ impl Principled {
         let mut value = Rgb::ZERO;
         if refl_ok && f > 0.0 {
             let fp = self.principled_fresnel(f, &a, wi_h, front, bsdf);
-            value = value + fp * (distr.eval(wh) * distr.g(wi, wo, wh) / (4.0 * cos_i.abs()));
+            value += fp * (distr.eval(wh) * distr.g(wi, wo, wh) / (4.0 * cos_i.abs()));
         }
         if self.has_spec_trans && bsdf > 0.0 && refr_ok && f < 1.0 {
             // Walter et al. 2007, eq. 21, with the radiance scaling `1 / eta_path^2`, which
             // cancels its `eta^2`.
             let t = (1.0 - f) * distr.eval(wh) * distr.g(wi, wo, wh) * wi_h * wo_h
                 / (cos_i * (wi_h + eta_path * wo_h).powi(2));
-            value = value + a.base_color.map(f32::sqrt) * (bsdf * t.abs());
+            value += a.base_color.map(f32::sqrt) * (bsdf * t.abs());
         }
         if front && refl_ok && a.clearcoat > 0.0 {
             let fcc = schlick_fresnel(Rgb::splat(0.04), wi_h, self.eta)[0];
             let dcc = Gtr1::clearcoat(self.clearcoat_gloss.eval_1(uv)).eval(wh);
             let gcc = super::disney::smith_ggx1(wi, wh, 0.25) * super::disney::smith_ggx1(wo, wh, 0.25);
-            value = value + Rgb::splat(0.25 * a.clearcoat * fcc * dcc * gcc * cos_o.abs());
+            value += Rgb::splat(0.25 * a.clearcoat * fcc * dcc * gcc * cos_o.abs());
         }
         if front && reflect && brdf > 0.0 {
             let params = DiffuseParams {
@@ -218,9 +218,9 @@ impl Principled {
                 has_flatness: self.has_flatness,
             };
             let (base, sheen) = diffuse_sheen(&params, a.base_color, cos_i, cos_o, wh.dot(wo));
-            value = value + a.base_color * (brdf * cos_o.abs() * base);
+            value += a.base_color * (brdf * cos_o.abs() * base);
             if a.metallic < 1.0 {
-                value = value + sheen * ((1.0 - a.metallic) * cos_o.abs());
+                value += sheen * ((1.0 - a.metallic) * cos_o.abs());
             }
         }
 

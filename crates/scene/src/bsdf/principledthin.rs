@@ -121,7 +121,7 @@ impl PrincipledThin {
         };
         let wo = mulsign(wo, cos_i);
         let (value, pdf) = self.eval_pdf(wi, wo, uv);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if pdf.is_nan() || pdf <= 0.0 || !pdf.is_finite() {
             return None;
         }
         let weight = value / pdf;
@@ -173,11 +173,11 @@ impl PrincipledThin {
                 let spec_tint = self.spec_tint.eval_1(uv);
                 let schlick = schlick_fresnel(tint(base_color) * schlick_r0(eta), wi_f.dot(wh), eta);
                 let f_thin = Rgb::splat(f * (1.0 - spec_tint)) + schlick * spec_tint;
-                value = value + f_thin * (st * d.eval(wh) * d.g(wi_f, wo_t, wh) / (4.0 * ci));
+                value += f_thin * (st * d.eval(wh) * d.g(wi_f, wo_t, wh) / (4.0 * ci));
             }
             if spec_trans {
                 let d = Self::trans_distr(&a, eta);
-                value = value + base_color * (st * (1.0 - f) * d.eval(wh) * d.g(wi_f, wo_t, wh) / (4.0 * ci));
+                value += base_color * (st * (1.0 - f) * d.eval(wh) * d.g(wi_f, wo_t, wh) / (4.0 * ci));
             }
         }
         if reflect && st < 1.0 && a.diff_trans < 1.0 {
@@ -190,10 +190,10 @@ impl PrincipledThin {
             };
             let (base, sheen) = diffuse_sheen(&params, base_color, ci, co, wh.dot(wo_t));
             let w = (1.0 - st) * (1.0 - a.diff_trans) * co;
-            value = value + base_color * (w * base) + sheen * w;
+            value += base_color * (w * base) + sheen * w;
         }
         if !reflect && st < 1.0 && a.diff_trans > 0.0 {
-            value = value + base_color * ((1.0 - st) * a.diff_trans * haze_core::INV_PI * co.abs());
+            value += base_color * ((1.0 - st) * a.diff_trans * haze_core::INV_PI * co.abs());
         }
 
         let [p_sr, p_st, p_dr, p_dt] = self.lobe_probs(&a);

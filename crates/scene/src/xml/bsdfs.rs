@@ -270,7 +270,7 @@ fn unit_weight(p: &Params, name: &str, default: f32) -> Result<Texture, LoadErro
 /// A sampling rate of the principled BSDFs (default 1, finite and >= 0).
 fn sampling_rate(p: &Params, name: &str) -> Result<f32, LoadError> {
     let v = p.float(name, 1.0)?;
-    if !(v >= 0.0) {
+    if v.is_nan() || v < 0.0 {
         return Err(p.error_at(name, format!("'{name}' must be >= 0, got {v}")));
     }
     Ok(v)
