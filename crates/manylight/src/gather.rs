@@ -435,7 +435,10 @@ fn walk_chain(
             // chain hits before its next delta vertex are left out, `after_rough`), then a BSDF
             // sample, and the chain goes on gathering beyond. The paths a virtual light would
             // make by a connection to this point are those the gathering beyond makes.
-            let frame = Frame::from_normal(h.ns);
+            // The frame the BSDF is sampled and evaluated in, as volpath's: an anisotropic
+            // or textured roughness follows `dp/du`, which a frame built from the normal alone
+            // ignores (`Scene::shading_frame`).
+            let frame = scene.shading_frame(&h);
             let wi = frame.to_local(-st.ray.d);
             if st.events < max_light_path {
                 let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, SurfaceMis::None);

@@ -90,3 +90,48 @@ fn projector_matches_mitsuba() {
     let r = compare(&scene, "projector");
     assert!(!r.passed(0.005, 5.0), "the mirrored image went unnoticed: {r}");
 }
+
+/// Mitsuba 3's `principledthin`: glossy and diffuse transmission through two upright sheets
+/// lit from behind. Control: the left sheet without its diffuse transmission.
+#[test]
+fn principledthin_matches_mitsuba() {
+    let mut scene = load("principledthin");
+    let r = compare(&scene, "principledthin");
+    assert!(r.passed(0.005, 5.0), "does not match Mitsuba 3: {r}");
+    let Bsdf::PrincipledThin(b) = &mut scene.shapes[0].bsdf else { panic!("a principledthin") };
+    b.diff_trans = haze_scene::texture::Texture::Constant(haze_core::Rgb::ZERO);
+    let r = compare(&scene, "principledthin");
+    assert!(!r.passed(0.005, 5.0), "a sheet without diffuse transmission went unnoticed: {r}");
+}
+
+/// Mitsuba 3's `rawconstant`: a 3-vector as a normal map and as a base colour, a float as a
+/// roughness, used unconverted. Control: the normal map's tilt mirrored (`x` to `1 - x`).
+#[test]
+fn rawconstant_matches_mitsuba() {
+    let mut scene = load("rawconstant");
+    let r = compare(&scene, "rawconstant");
+    assert!(r.passed(0.005, 5.0), "does not match Mitsuba 3: {r}");
+    let Bsdf::Perturbed(p) = &mut scene.shapes[0].bsdf else { panic!("a normal map") };
+    let haze_scene::bsdf::Perturbation::NormalMap(t) = &mut p.perturbation else { panic!("a normalmap") };
+    *t = haze_scene::texture::Texture::Constant(haze_core::Rgb::new(0.38, 0.42, 0.95));
+    let r = compare(&scene, "rawconstant");
+    assert!(!r.passed(0.005, 5.0), "a mirrored normal went unnoticed: {r}");
+}
+
+/// Mitsuba 3's `principled`: an anisotropic clearcoated metal, a sheen/flatness/spec_tint base
+/// and a transmitting pane. Ignored: haze is brighter than Mitsuba 3 by up to 3x in a few
+/// pixels near the two rectangles' meeting point (image mean about 1.02), although `eval`
+/// and `pdf` of both materials agree with Mitsuba 3.9.1's to 6 digits at probed directions;
+/// a `roughdielectric` sphere in the same place shows the same excess (issue 38 follow-up).
+/// Control: the metal's `anisotropic` set to 0.
+#[test]
+#[ignore = "unresolved excess of a few pixels against Mitsuba 3 (see the doc comment)"]
+fn principled_matches_mitsuba() {
+    let mut scene = load("principled");
+    let r = compare(&scene, "principled");
+    assert!(r.passed(0.005, 5.0), "does not match Mitsuba 3: {r}");
+    let Bsdf::Principled(b) = &mut scene.shapes[0].bsdf else { panic!("a principled") };
+    b.anisotropic = haze_scene::texture::Texture::Constant(haze_core::Rgb::ZERO);
+    let r = compare(&scene, "principled");
+    assert!(!r.passed(0.005, 5.0), "an isotropic metal went unnoticed: {r}");
+}

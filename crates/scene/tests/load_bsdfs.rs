@@ -132,7 +132,24 @@ fn bad_bsdf_and_texture_parameters() {
     let e = err(r#"<bsdf type="twosided"><bsdf type="diffuse"/><bsdf type="null"/></bsdf>"#);
     assert!(e.contains("different BSDF on each side"), "{e}");
     let e = err(r#"<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf>"#);
-    assert!(e.contains("unsupported texture type 'mesh_attribute' (supported: checkerboard, bitmap)"), "{e}");
+    assert!(
+        e.contains(
+            "unsupported texture type 'mesh_attribute' (supported: rawconstant, checkerboard, bitmap)"
+        ),
+        "{e}"
+    );
+    let e = err(
+        r#"<bsdf type="principled"><float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf>"#,
+    );
+    assert!(e.contains("give either 'eta' or 'specular', not both"), "{e}");
+    let e = err(r#"<bsdf type="principledthin"><float name="diff_trans" value="2.5"/></bsdf>"#);
+    assert!(e.contains("'diff_trans' must lie in [0, 2]"), "{e}");
+    let e = err(r#"<bsdf type="diffuse"><texture type="rawconstant" name="reflectance"/></bsdf>"#);
+    assert!(e.contains("a rawconstant needs 'value'"), "{e}");
+    let e = err(
+        r#"<bsdf type="diffuse"><texture type="rawconstant" name="reflectance"><string name="value" value="a"/></texture></bsdf>"#,
+    );
+    assert!(e.contains("is a <float> or a <vector>"), "{e}");
     let e = err(
         r#"<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"><rgb name="color0" value="2"/></texture></bsdf>"#,
     );

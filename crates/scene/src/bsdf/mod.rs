@@ -1,8 +1,9 @@
 //! Surface scattering models: Mitsuba 3's BSDF plugins `null`, `diffuse`, `dielectric`,
 //! `thindielectric`, `roughdielectric`, `plastic`, `roughplastic`, `twosided`, `conductor` and
-//! `roughconductor`, `mask`, `pplastic` (unpolarised), `blendbsdf`, and `normalmap`/`bumpmap`
-//! (`perturbed`), one file each,
-//! with the microfacet distributions they share in [`microfacet`].
+//! `roughconductor`, `mask`, `pplastic` (unpolarised), `blendbsdf`, `normalmap`/`bumpmap`
+//! (`perturbed`), `principled` and `principledthin`, one file each,
+//! with the microfacet distributions they share in [`microfacet`] and the Disney lobes of the
+//! two principled BSDFs in `disney`.
 //!
 //! Local shading frame: `z` is the shading normal. `wi` points *away* from the surface towards
 //! where the light (or the path) came from, `wo` away from it towards where it goes, as in
@@ -12,11 +13,14 @@
 mod blend;
 mod conductor;
 mod dielectric;
+mod disney;
 mod mask;
 pub mod microfacet;
 mod perturbed;
 mod plastic;
 mod pplastic;
+mod principled;
+mod principledthin;
 mod roughdielectric;
 mod roughness;
 mod roughplastic;
@@ -31,6 +35,8 @@ pub use microfacet::{Microfacet, MicrofacetType};
 pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 pub use pplastic::PPlastic;
+pub use principled::Principled;
+pub use principledthin::PrincipledThin;
 pub use roughdielectric::RoughDielectric;
 pub use roughness::Roughness;
 pub use roughplastic::RoughPlastic;
@@ -70,6 +76,10 @@ pub enum Bsdf {
     /// The nested BSDF in a shading frame a normal or bump map perturbs (`normalmap`,
     /// `bumpmap`); the scene perturbs the hit's shading normal, the BSDF is the nested one.
     Perturbed(Box<Perturbed>),
+    /// Mitsuba 3's `principled` (the Disney BSDF, Burley 2012 and 2015).
+    Principled(Box<Principled>),
+    /// Mitsuba 3's `principledthin` (Burley 2015's thin-surface BSDF).
+    PrincipledThin(Box<PrincipledThin>),
 }
 
 /// A sampled outgoing direction.
@@ -136,6 +146,8 @@ impl Bsdf {
     pub fn is_rough_interface(&self) -> bool {
         match self {
             Bsdf::RoughDielectric(_) => true,
+            // A GGX transmission lobe: the same refraction lobes as a rough dielectric.
+            Bsdf::Principled(p) => p.has_spec_trans,
             Bsdf::Perturbed(p) => p.nested.is_rough_interface(),
             _ => false,
         }
@@ -161,6 +173,8 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.distr.is_anisotropic(),
             Bsdf::Conductor(c) => c.distr.as_ref().is_some_and(Roughness::is_anisotropic),
             Bsdf::PPlastic(b) => b.distr.is_anisotropic(),
+            Bsdf::Principled(b) => b.has_anisotropic,
+            Bsdf::PrincipledThin(b) => b.has_anisotropic,
             Bsdf::Mask(m) => m.nested.is_anisotropic(),
             Bsdf::TwoSided(b) => b.is_anisotropic(),
             Bsdf::Blend(b) => b.nested.iter().any(Bsdf::is_anisotropic),
@@ -217,6 +231,8 @@ impl Bsdf {
             Bsdf::PPlastic(b) => b.sample(wi, u1, u2, uv),
             Bsdf::Blend(b) => b.sample(wi, u1, u2, uv, with_pdf),
             Bsdf::Perturbed(p) => p.nested.sample_with(wi, u1, u2, uv, with_pdf),
+            Bsdf::Principled(b) => b.sample(wi, u1, u2, uv),
+            Bsdf::PrincipledThin(b) => b.sample(wi, u1, u2, uv),
         }
     }
 
@@ -235,6 +251,8 @@ impl Bsdf {
             Bsdf::PPlastic(b) => b.eval(wi, wo, uv),
             Bsdf::Blend(b) => b.eval(wi, wo, uv),
             Bsdf::Perturbed(p) => p.nested.eval(wi, wo, uv),
+            Bsdf::Principled(b) => b.eval(wi, wo, uv),
+            Bsdf::PrincipledThin(b) => b.eval(wi, wo, uv),
             _ => Rgb::ZERO,
         }
     }
@@ -254,6 +272,8 @@ impl Bsdf {
             | Bsdf::PPlastic(_) => false,
             // A mask passes light straight through with probability `1 - opacity`.
             Bsdf::Mask(_) => true,
+            Bsdf::Principled(b) => b.has_spec_trans,
+            Bsdf::PrincipledThin(b) => b.has_spec_trans || b.has_diff_trans,
             Bsdf::TwoSided(b) => b.transmits(),
             Bsdf::Blend(b) => b.nested.iter().any(Bsdf::transmits),
             Bsdf::Perturbed(p) => p.nested.transmits(),
@@ -271,7 +291,8 @@ impl Bsdf {
                 | Bsdf::RoughPlastic(_)
                 | Bsdf::Conductor(_)
                 | Bsdf::PPlastic(_)
-        ) || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
+        ) || matches!(self, Bsdf::Principled(b) if !b.has_spec_trans)
+            || matches!(self, Bsdf::Mask(m) if m.nested.front_only())
             || matches!(self, Bsdf::Blend(b) if b.nested.iter().all(Bsdf::front_only))
             || matches!(self, Bsdf::Perturbed(p) if p.nested.front_only())
     }
@@ -290,6 +311,8 @@ impl Bsdf {
             Bsdf::PPlastic(b) => b.pdf(wi, wo, uv),
             Bsdf::Blend(b) => b.pdf(wi, wo, uv),
             Bsdf::Perturbed(p) => p.nested.pdf(wi, wo, uv),
+            Bsdf::Principled(b) => b.pdf(wi, wo, uv),
+            Bsdf::PrincipledThin(b) => b.pdf(wi, wo, uv),
             _ => 0.0,
         }
     }
@@ -306,6 +329,8 @@ impl Bsdf {
             Bsdf::PPlastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::Blend(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::Perturbed(p) => p.nested.eval_pdf(wi, wo, uv),
+            Bsdf::Principled(b) => b.eval_pdf(wi, wo, uv),
+            Bsdf::PrincipledThin(b) => b.eval_pdf(wi, wo, uv),
             _ => (self.eval(wi, wo, uv), self.pdf(wi, wo, uv)),
         }
     }

@@ -1,13 +1,13 @@
 //! BSDF plugins `null`, `diffuse`, `dielectric`, `thindielectric`, `roughdielectric`,
 //! `plastic`, `roughplastic`, `twosided`, `conductor`, `roughconductor`, `mask`, `pplastic` and
-//! `blendbsdf`, `normalmap` and `bumpmap`, and Mitsuba 3's table
+//! `blendbsdf`, `normalmap` and `bumpmap`, `principled` and `principledthin`, and Mitsuba 3's table
 //! of named indices of refraction.
 
 use super::params::Params;
 use super::{textures, LoadError};
 use crate::bsdf::{
     conductor_ior, Blend, Bsdf, Conductor, Mask, Microfacet, MicrofacetType, PPlastic, Perturbation,
-    Perturbed, Plastic, RoughDielectric, RoughPlastic, Roughness,
+    Perturbed, Plastic, Principled, PrincipledThin, RoughDielectric, RoughPlastic, Roughness,
 };
 use crate::texture::Texture;
 use haze_core::color::SpectrumKind;
@@ -193,9 +193,13 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
             let distr = if p.ty() == "roughconductor" { Some(roughness(p)?) } else { None };
             Bsdf::Conductor(Box::new(Conductor { eta, k, specular_reflectance, distr }))
         }
+        "principled" => Bsdf::Principled(Box::new(principled(p)?)),
+        "principledthin" => Bsdf::PrincipledThin(Box::new(principled_thin(p)?)),
         _ => Bsdf::Null,
     };
     let texture_params: &[&str] = match p.ty() {
+        "principled" => PRINCIPLED_TEXTURES,
+        "principledthin" => PRINCIPLED_THIN_TEXTURES,
         "diffuse" => &["reflectance"],
         "plastic" | "roughplastic" => &["diffuse_reflectance"],
         "conductor" => &["specular_reflectance"],
@@ -213,6 +217,141 @@ pub(super) fn build(p: &Params) -> Result<Bsdf, LoadError> {
     }
     p.finish()?;
     Ok(bsdf)
+}
+
+/// The parameters of `principled` that may be textures (all but `eta`, `specular` and the
+/// sampling rates).
+const PRINCIPLED_TEXTURES: &[&str] = &[
+    "base_color",
+    "roughness",
+    "anisotropic",
+    "metallic",
+    "spec_trans",
+    "spec_tint",
+    "sheen",
+    "sheen_tint",
+    "flatness",
+    "clearcoat",
+    "clearcoat_gloss",
+];
+
+/// The parameters of `principledthin` that may be textures (`eta` too, unlike `principled`'s).
+const PRINCIPLED_THIN_TEXTURES: &[&str] = &[
+    "base_color",
+    "roughness",
+    "anisotropic",
+    "spec_trans",
+    "spec_tint",
+    "sheen",
+    "sheen_tint",
+    "flatness",
+    "eta",
+    "diff_trans",
+];
+
+/// Mitsuba 3's `get_flag` of the principled BSDFs: the parameter is given and is not the
+/// number 0 (a texture counts as given). The flags decide which lobes the BSDF has.
+fn principled_flag(p: &Params, name: &str) -> Result<bool, LoadError> {
+    if p.objects(&["texture"]).iter().any(|o| o.name == Some(name)) {
+        return Ok(true);
+    }
+    match p.raw(name) {
+        None => Ok(false),
+        Some(el) if el.tag == "float" || el.tag == "integer" => Ok(p.float(name, 0.0)? != 0.0),
+        Some(_) => Ok(true),
+    }
+}
+
+/// A principled weight (`metallic`, `sheen`, ...): a float or texture in [0, 1].
+fn unit_weight(p: &Params, name: &str, default: f32) -> Result<Texture, LoadError> {
+    textures::texture(p, name, Rgb::splat(default), (0.0, 1.0))
+}
+
+/// A sampling rate of the principled BSDFs (default 1, finite and >= 0).
+fn sampling_rate(p: &Params, name: &str) -> Result<f32, LoadError> {
+    let v = p.float(name, 1.0)?;
+    if v.is_nan() || v < 0.0 {
+        return Err(p.error_at(name, format!("'{name}' must be >= 0, got {v}")));
+    }
+    Ok(v)
+}
+
+/// Mitsuba 3's `principled`: the weights of [`PRINCIPLED_TEXTURES`] (defaults: `base_color`
+/// 0.5, `roughness` 0.5, the others 0), and `eta` or `specular` (0.5), not both:
+/// `eta = 2 / (1 - sqrt(0.08 specular)) - 1` (Burley 2015, eq. 1 inverted). With transmission,
+/// `eta` 1 becomes 1.001 and `specular` 0 becomes 0.001, as Mitsuba does (an index-matched
+/// transmission lobe would be a delta).
+fn principled(p: &Params) -> Result<Principled, LoadError> {
+    let has_spec_trans = principled_flag(p, "spec_trans")?;
+    let eta = match (p.float_opt("eta")?, p.raw("specular").is_some()) {
+        (Some(_), true) => return Err(p.error_at("specular", "give either 'eta' or 'specular', not both")),
+        (Some(eta), false) => {
+            if !(MIN_IOR..=MAX_IOR).contains(&eta) {
+                return Err(p.error_at("eta", format!("'eta' must lie in [{MIN_IOR}, {MAX_IOR}], got {eta}")));
+            }
+            if has_spec_trans && eta == 1.0 {
+                1.001
+            } else {
+                eta
+            }
+        }
+        (None, _) => {
+            let mut specular = p.float("specular", 0.5)?;
+            // specular 10 is eta 17.9; beyond 12.5 the formula has no solution.
+            if !(0.0..=10.0).contains(&specular) {
+                return Err(p.error_at("specular", format!("'specular' must lie in [0, 10], got {specular}")));
+            }
+            if has_spec_trans && specular == 0.0 {
+                specular = 1e-3;
+            }
+            2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
+        }
+    };
+    Ok(Principled {
+        base_color: unit_weight(p, "base_color", 0.5)?,
+        roughness: unit_weight(p, "roughness", 0.5)?,
+        anisotropic: unit_weight(p, "anisotropic", 0.0)?,
+        metallic: unit_weight(p, "metallic", 0.0)?,
+        spec_trans: unit_weight(p, "spec_trans", 0.0)?,
+        spec_tint: unit_weight(p, "spec_tint", 0.0)?,
+        sheen: unit_weight(p, "sheen", 0.0)?,
+        sheen_tint: unit_weight(p, "sheen_tint", 0.0)?,
+        flatness: unit_weight(p, "flatness", 0.0)?,
+        clearcoat: unit_weight(p, "clearcoat", 0.0)?,
+        clearcoat_gloss: unit_weight(p, "clearcoat_gloss", 0.0)?,
+        eta,
+        has_spec_trans,
+        has_anisotropic: principled_flag(p, "anisotropic")?,
+        has_flatness: principled_flag(p, "flatness")?,
+        spec_srate: sampling_rate(p, "main_specular_sampling_rate")?,
+        clearcoat_srate: sampling_rate(p, "clearcoat_sampling_rate")?,
+        diffuse_srate: sampling_rate(p, "diffuse_reflectance_sampling_rate")?,
+    })
+}
+
+/// Mitsuba 3's `principledthin`: the weights of [`PRINCIPLED_THIN_TEXTURES`] (defaults as
+/// `principled`'s; `eta` 1.5, a float or texture; `diff_trans` 0, in [0, 2]).
+fn principled_thin(p: &Params) -> Result<PrincipledThin, LoadError> {
+    Ok(PrincipledThin {
+        base_color: unit_weight(p, "base_color", 0.5)?,
+        roughness: unit_weight(p, "roughness", 0.5)?,
+        anisotropic: unit_weight(p, "anisotropic", 0.0)?,
+        spec_trans: unit_weight(p, "spec_trans", 0.0)?,
+        spec_tint: unit_weight(p, "spec_tint", 0.0)?,
+        sheen: unit_weight(p, "sheen", 0.0)?,
+        sheen_tint: unit_weight(p, "sheen_tint", 0.0)?,
+        flatness: unit_weight(p, "flatness", 0.0)?,
+        eta: textures::texture(p, "eta", Rgb::splat(1.5), (MIN_IOR, MAX_IOR))?,
+        diff_trans: textures::texture(p, "diff_trans", Rgb::ZERO, (0.0, 2.0))?,
+        has_spec_trans: principled_flag(p, "spec_trans")?,
+        has_diff_trans: principled_flag(p, "diff_trans")?,
+        has_anisotropic: principled_flag(p, "anisotropic")?,
+        has_flatness: principled_flag(p, "flatness")?,
+        spec_refl_srate: sampling_rate(p, "specular_reflectance_sampling_rate")?,
+        spec_trans_srate: sampling_rate(p, "specular_transmittance_sampling_rate")?,
+        diff_refl_srate: sampling_rate(p, "diffuse_reflectance_sampling_rate")?,
+        diff_trans_srate: sampling_rate(p, "diffuse_transmittance_sampling_rate")?,
+    })
 }
 
 /// A BSDF nested in another (`twosided`, `mask`, `blendbsdf`, `normalmap`, `bumpmap`): any

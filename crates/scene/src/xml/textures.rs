@@ -1,4 +1,4 @@
-//! Texture plugins `checkerboard` and `bitmap`, and reading a reflectance parameter that may be a spectrum
+//! Texture plugins `rawconstant`, `checkerboard` and `bitmap`, and reading a reflectance parameter that may be a spectrum
 //! or a `<texture>` (nested or referenced), as Mitsuba 3's `props.texture(name)` does.
 
 use super::params::Params;
@@ -16,7 +16,27 @@ use std::sync::Arc;
 ///   (`bilinear`; or `nearest`), `wrap_mode` (`repeat`; or `mirror`, `clamp`), `raw` (false:
 ///   8- and 16-bit images are sRGB-decoded), `to_uv` (identity); `format` and `accel` are
 ///   storage and GPU choices of Mitsuba 3's, checked and ignored. See [`crate::bitmap`].
+/// - `rawconstant`: `value` (required), a `<float>` or a `<vector>`, returned as it is (no
+///   spectral conversion, no clamping: Mitsuba 3 uses it for normal maps and other non-colours).
 pub(super) fn build(p: &Params) -> Result<Texture, LoadError> {
+    if p.ty() == "rawconstant" {
+        let value = match p.raw("value").map(|el| el.tag.as_str()) {
+            None => return Err(p.element().error("a rawconstant needs 'value' (a <float> or a <vector>)")),
+            Some("float" | "integer") => Rgb::splat(p.float("value", 0.0)?),
+            Some("vector" | "point") => {
+                let v = p.point_opt("value")?.unwrap_or_default();
+                Rgb::new(v.x, v.y, v.z)
+            }
+            Some(tag) => {
+                return Err(p.error_at(
+                    "value",
+                    format!("a rawconstant's 'value' is a <float> or a <vector> (3 numbers), not a <{tag}>"),
+                ))
+            }
+        };
+        p.finish()?;
+        return Ok(Texture::Constant(value));
+    }
     let to_uv = p.transform_opt("to_uv")?.unwrap_or(Mat4::IDENTITY);
     if !to_uv.is_finite() {
         return Err(p.error_at("to_uv", "'to_uv' must be finite"));
