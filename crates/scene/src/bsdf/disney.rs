@@ -1,8 +1,8 @@
 //! The Disney ("principled") lobes that Mitsuba 3's `principled` and `principledthin` share:
 //! Schlick's Fresnel weight, the diffuse with retro-reflection and Hanrahan-Krueger "fake
 //! subsurface", the sheen, the GTR1 clearcoat distribution and the roughness-to-alpha map
-//! (Burley 2012, "Physically Based Shading at Disney", §5.3-5.6 and Appendix B; Burley 2015,
-//! "Extending the Disney BRDF to a BSDF with Integrated Subsurface Scattering", §3-4), with
+//! (Burley 2012, "Physically Based Shading at Disney", Sections 5.3-5.6 and Appendix B; Burley 2015,
+//! "Extending the Disney BRDF to a BSDF with Integrated Subsurface Scattering", Sections 3-4), with
 //! Mitsuba 3's choices (`principledhelpers.h`) where they differ from the notes, so that scenes
 //! render as in Mitsuba 3.
 //!
@@ -111,7 +111,7 @@ pub struct DiffuseParams {
 /// `Rr = 2 roughness cos_d^2` (Burley 2015, eqs. 4-5); blended by `flatness` towards the
 /// Hanrahan-Krueger approximation `1.25 (Fss (1/(cos_o + cos_i) - 1/2) + 1/2)`,
 /// `Fss = (1 + (Fss90 - 1) Fo)(1 + (Fss90 - 1) Fi)`, `Fss90 = Rr / 2` (Burley 2012, Appendix B).
-/// Sheen: `sheen Fd lerp(1, tint, sheen_tint)`, `Fd = schlick_weight(cos_d)` (Burley 2015, §3.1).
+/// Sheen: `sheen Fd lerp(1, tint, sheen_tint)`, `Fd = schlick_weight(cos_d)` (Burley 2015, Section 3.1).
 pub fn diffuse_sheen(p: &DiffuseParams, base_color: Rgb, cos_i: f32, cos_o: f32, cos_d: f32) -> (f32, Rgb) {
     let (fo, fi) = (schlick_weight(cos_o.abs()), schlick_weight(cos_i.abs()));
     let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);

@@ -1,4 +1,4 @@
-//! Mitsuba 3's `principledthin`: the thin-surface Disney BSDF (Burley 2015, §4: a sheet with no
+//! Mitsuba 3's `principledthin`: the thin-surface Disney BSDF (Burley 2015, Section 4: a sheet with no
 //! inside, the same from both sides). Four lobes: a GGX reflection and a GGX "transmission"
 //! (the reflection's mirror image through the sheet, with the roughness scaled by
 //! `0.65 eta - 0.35`, Burley 2015, Figure 15), both weighted by `spec_trans`; and a diffuse
