@@ -104,6 +104,7 @@ class Scene:
         vpl_clamp: float | None = None,
         clamp: float | None = None,
         compensated_clamp: float | None = None,
+        path_traced_media: str | None = None,
         cut: str | None = None,
         cut_size: int | None = None,
         light_samples: int | None = None,
@@ -131,6 +132,7 @@ class Scene:
         vpl_clamp: float | None = None,
         clamp: float | None = None,
         compensated_clamp: float | None = None,
+        path_traced_media: str | None = None,
         cut: str | None = None,
         cut_size: int | None = None,
         light_samples: int | None = None,
@@ -159,6 +161,7 @@ class Scene:
         vpl_clamp: float | None = None,
         clamp: float | None = None,
         compensated_clamp: float | None = None,
+        path_traced_media: str | None = None,
         cut: str | None = None,
         cut_size: int | None = None,
         light_samples: int | None = None,
@@ -195,6 +198,7 @@ class Scene:
         builder: str | None = None,
         sampler: str | None = None,
         compensated_clamp: float | None = None,
+        path_traced_media: str | None = None,
     ) -> np.ndarray:
         """Per pixel, a float32 array of shape (H, W), what ``haze render --cut-image`` draws:
         the mean cut size (``cut="bound"``) or the largest cut node's share of the stochastic

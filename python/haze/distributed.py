@@ -146,6 +146,7 @@ def render(
     vpl_clamp: float | None = None,
     clamp: float | None = None,
     compensated_clamp: float | None = None,
+    path_traced_media: str | None = None,
     cut: str | None = None,
     cut_size: int | None = None,
     light_samples: int | None = None,
@@ -183,7 +184,7 @@ def render(
         scene_path: the scene file on the driver; it and every file it reads are shipped to
             the workers through the object store.
         integrator, spp, time, seed, spp_per_pass, components, vrls, light_paths, caustic_paths, vpl_clamp,
-            clamp, compensated_clamp, cut, cut_size, light_samples, epsilon, max_cut, bound, builder, sampler: as in :meth:`haze.Scene.render` (the engine's
+            clamp, compensated_clamp, path_traced_media, cut, cut_size, light_samples, epsilon, max_cut, bound, builder, sampler: as in :meth:`haze.Scene.render` (the engine's
             options, :data:`haze.OPTIONS`).
         defaults: ``<default>`` overrides of the scene (``-D name=value``).
         address: Ray cluster address (``"auto"`` for a running cluster); used only if Ray is

@@ -55,7 +55,7 @@ def check_signature(function, skip=()):
 def test_the_table_lists_every_command_line_option():
     assert list(TABLE) == [
         "spp", "time", "seed", "spp_per_pass", "components",
-        "vrls", "light_paths", "caustic_paths", "vpl_clamp", "clamp", "compensated_clamp", "cut", "cut_size", "light_samples", "epsilon", "max_cut", "bound", "builder", "sampler",
+        "vrls", "light_paths", "caustic_paths", "vpl_clamp", "clamp", "compensated_clamp", "path_traced_media", "cut", "cut_size", "light_samples", "epsilon", "max_cut", "bound", "builder", "sampler",
     ]  # fmt: skip
     assert TABLE["vrls"]["default"] == "10000" and TABLE["epsilon"]["default"] == "0.02"
     assert TABLE["max_cut"]["methods"] == ["vrl_lightcuts", "vpl_lightcuts"]

@@ -94,6 +94,7 @@ impl Method {
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
             caustic_paths: options.caustic_paths,
             compensated_clamp: options.compensated_clamp,
+            path_traced_media: options.path_traced_media,
         };
         // Name the method in a refusal (e.g. an environment emitter): "integrator 'vrl': ...".
         let named = |e: haze_scene::lights::EmissionError| anyhow!("integrator '{kind}': {e}");

@@ -14,7 +14,7 @@
 
 use anyhow::{anyhow, bail, Result};
 use haze_core::{SamplerKind, SamplerSpec};
-use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings};
+use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings, PathTracedMedia};
 use haze_manylight::tree::bound::BoundKind;
 use haze_render::progressive::RenderSettings;
 use haze_scene::Scene;
@@ -514,6 +514,39 @@ pub const OPTIONS: &[OptionSpec] = &[
         get: |o| o.method.compensated_clamp.map(|c| c.to_string()),
     },
     OptionSpec {
+        name: "path_traced_media",
+        kind: Kind::Choice(&["heterogeneous", "all", "none"]),
+        default: Default::Value("heterogeneous"),
+        help: "Media in which the camera path is traced as volpath traces it (free flight, \
+               next-event estimation, phase sampling) instead of gathering the virtual lights: \
+               heterogeneous (where volpath won on every measured scene), all (every scattering \
+               medium: the virtual lights then light surfaces only), or none (gather in every \
+               medium). The virtual lights are traced in every medium either way \
+               (docs/theory.md 2.1, \"Path-traced media\").",
+        applies_to: MethodKind::MANY_LIGHT,
+        conflicts_with: &[],
+        requires: None,
+        scope: Scope::Method,
+        example: "none",
+        set: |o, v| {
+            o.method.path_traced_media = match v.word() {
+                "all" => PathTracedMedia::All,
+                "none" => PathTracedMedia::None,
+                _ => PathTracedMedia::Heterogeneous,
+            }
+        },
+        get: |o| {
+            Some(
+                match o.method.path_traced_media {
+                    PathTracedMedia::Heterogeneous => "heterogeneous",
+                    PathTracedMedia::All => "all",
+                    PathTracedMedia::None => "none",
+                }
+                .into(),
+            )
+        },
+    },
+    OptionSpec {
         name: "cut",
         kind: Kind::Choice(&["stochastic", "bound"]),
         default: Default::Value("stochastic"),
@@ -689,6 +722,8 @@ pub struct MethodOptions {
     pub lightcuts: LightcutSettings,
     /// Caustic paths per pass (`None`: one per pixel; 0: the camera continuation instead).
     pub caustic_paths: Option<u64>,
+    /// The media the camera walk path-traces instead of gathering in.
+    pub path_traced_media: PathTracedMedia,
     /// The sample generator's type (`None`: the scene's `<sampler>`'s).
     pub sampler: Option<SamplerKind>,
 }
@@ -776,6 +811,7 @@ impl Options {
                 compensated_clamp: None,
                 lightcuts: LightcutSettings::default(),
                 caustic_paths: None,
+                path_traced_media: PathTracedMedia::None,
                 sampler: None,
             },
         };
@@ -940,7 +976,7 @@ mod tests {
         assert_eq!(o.method.lightcuts.stochastic.cut_size, 3);
         assert_eq!(
             o.describe(VplLightcuts),
-            "vrls=10000 cut=stochastic cut_size=3 light_samples=1 builder=agglomerative"
+            "vrls=10000 path_traced_media=heterogeneous cut=stochastic cut_size=3 light_samples=1 builder=agglomerative"
         );
     }
 
@@ -1076,10 +1112,11 @@ mod tests {
     #[test]
     fn describe_shows_the_method_options_in_effect() {
         assert_eq!(Options::defaults().describe(VolPath), "");
-        assert_eq!(Options::defaults().describe(Vpl), "vrls=10000");
+        assert_eq!(Options::defaults().describe(Vpl), "vrls=10000 path_traced_media=heterogeneous");
         assert_eq!(
             ok(VrlLightcuts, &[("light_paths", "5"), ("max_cut", "9")]).describe(VrlLightcuts),
-            "light_paths=5 cut=bound epsilon=0.02 max_cut=9 bound=paper builder=agglomerative"
+            "light_paths=5 path_traced_media=heterogeneous cut=bound epsilon=0.02 max_cut=9 bound=paper \
+             builder=agglomerative"
         );
     }
 

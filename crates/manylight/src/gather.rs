@@ -13,12 +13,13 @@ use crate::camera::{CameraSegment, MAX_SEGMENTS};
 use crate::vrl::Segment;
 use glam::{Vec2, Vec3};
 use haze_core::ray::offset_origin;
+use haze_core::transmittance::hero_channel;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
-use haze_render::integrators::{surface_nee, SurfaceMis};
+use haze_render::integrators::{surface_nee, HandOff, PathState, SurfaceMis, VolPath};
 use haze_render::{Component, PathRadiance};
 use haze_scene::bsdf::BsdfSample;
-use haze_scene::{Bsdf, MediumId, Scene, SurfaceInteraction};
+use haze_scene::{Bsdf, Medium, MediumId, Scene, SurfaceInteraction};
 use std::cell::RefCell;
 
 /// A gathering surface point: where a camera chain met a non-delta surface.
@@ -67,6 +68,37 @@ pub(crate) trait Gather {
     /// `Some(c)`: `point` clamps the `1/d^2` of its surface VPLs at `c`, and the walk recovers
     /// the clamped part (`Walk::compensate_from`).
     fn compensated_clamp(&self) -> Option<f32>;
+    /// The media in which a gathering chain hands the rest of its path to volpath.
+    fn path_traced_media(&self) -> PathTracedMedia;
+}
+
+/// The media in which the camera walk of a many-light method does not gather: a gathering
+/// chain that enters one hands the rest of its path to volpath's walk (free flight,
+/// next-event estimation with MIS, phase and BSDF sampling; `docs/theory.md` §2.1, "Path-traced
+/// media"). The virtual lights are still traced there, and light the media and surfaces the
+/// camera gathers at elsewhere.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathTracedMedia {
+    /// Gather everywhere.
+    None,
+    /// Heterogeneous media, where every measured scene rendered better by volpath
+    /// (docs/results.md: the smoke plume at densities 1-8, the cumulus under sun and sky).
+    #[default]
+    Heterogeneous,
+    /// Every medium that scatters.
+    All,
+}
+
+impl PathTracedMedia {
+    /// True if a gathering chain in `medium` hands its path to volpath.
+    #[inline]
+    pub fn covers(self, medium: &Medium) -> bool {
+        match self {
+            PathTracedMedia::None => false,
+            PathTracedMedia::Heterogeneous => medium.hetero.is_some(),
+            PathTracedMedia::All => medium.hetero.is_some() || !medium.sigma_s().is_black(),
+        }
+    }
 }
 
 thread_local! {
@@ -379,6 +411,11 @@ fn walk_chain(
         let hit = scene.intersect(&st.ray);
         let len = hit.map_or(st.ray.t_max, |h| h.t);
         if let Some(m) = st.medium {
+            let med = scene.medium(m);
+            if st.gathering && gather.path_traced_media().covers(med) && enters(med, &st.ray, len) {
+                hand_off(scene, st, gather, sampler, out);
+                return ChainEnd::Stop;
+            }
             let segment = |seg: Segment| ChainSegment {
                 cs: CameraSegment { seg, medium: m, tr_before: st.beta, events: st.events },
                 after_surface: st.surface_seen,
@@ -408,13 +445,15 @@ fn walk_chain(
             }
         }
         let emitted = if st.surface_seen { Component::Surface } else { Component::Emitted };
+        // `hide_emitters` hides what the camera sees at no event, as volpath's `depth == 0`.
+        let hidden = st.events == 0 && scene.integrator.hide_emitters;
         let Some(h) = hit else {
-            if st.gathering && !st.after_rough {
+            if st.gathering && !st.after_rough && !hidden {
                 out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
             }
             return ChainEnd::Stop;
         };
-        if st.gathering && !st.skip_area_emitters && !st.after_rough {
+        if st.gathering && !st.skip_area_emitters && !st.after_rough && !hidden {
             if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
                 out.add(emitted, st.beta * le);
             }
@@ -501,6 +540,44 @@ fn walk_chain(
         }
     }
     ChainEnd::Stop
+}
+
+/// True if the ray's first `len` crosses a part of `medium` that can scatter (a heterogeneous
+/// medium's majorant grid, T27).
+fn enters(medium: &Medium, ray: &Ray, len: f32) -> bool {
+    match medium.hetero.as_deref() {
+        None => len > 0.0,
+        Some(h) => h.clip(ray.o, ray.d, 0.0, len).is_some(),
+    }
+}
+
+/// The rest of the path of the gathering chain `st`, which enters a path-traced medium, by
+/// volpath's walk: its throughput, event counts and component class carry over, and the emitter
+/// hits that the walk's other strategies count are left to them (`HandOff`): after a rough
+/// interface its next-event estimation's, behind a delta chain from a vertex the camera sees
+/// directly the caustic paths'. Emitter hits before volpath's first event count fully, as the
+/// gathering chain counts them. Paths partition by their first camera vertex that is not a
+/// delta or null one: in a path-traced medium (or beyond one on the chain) volpath's, elsewhere
+/// the gather's.
+fn hand_off(scene: &Scene, st: &Walk, gather: &impl Gather, sampler: &mut Sampler, out: &mut PathRadiance) {
+    let volpath = VolPath::from_spec(&scene.integrator);
+    let hero = hero_channel(sampler.next_1d());
+    let path = PathState {
+        beta: st.beta,
+        depth: st.events,
+        // Before a surface event every event was a medium event (`Component::classify`).
+        medium_events: st.events,
+        surface_events: st.surface_seen as u32,
+        first_query: false,
+        hand_off: HandOff {
+            skip_all: st.after_rough,
+            skip_area: st.skip_area_emitters,
+            direct: st.direct && gather.splats_caustics(),
+            pending: false,
+        },
+        ..PathState::camera(st.ray, st.medium, hero)
+    };
+    volpath.trace(scene, path, sampler, out);
 }
 
 /// Russian roulette after [`RR_EVENTS`] events: the walk survives with probability

@@ -6,7 +6,9 @@
 mod compare_support;
 
 use compare_support::*;
-use haze_manylight::integrators::{ManyLightSettings, TestControls, VplIntegrator, VrlIntegrator};
+use haze_manylight::integrators::{
+    ManyLightSettings, PathTracedMedia, TestControls, VplIntegrator, VrlIntegrator,
+};
 use haze_render::{Component, VolPath};
 use haze_scene::{load_file, LoadOptions, Scene};
 use haze_testkit::data::validation_scene;
@@ -384,6 +386,53 @@ fn smoke_room_heterogeneous_matches_volpath() {
 #[test]
 fn smoke_puff_heterogeneous_matches_volpath() {
     check_smoke(false);
+}
+
+/// The hand-off to volpath's walk in heterogeneous media (`path_traced_media`, its default,
+/// `docs/theory.md` §2.1 "Path-traced media"): `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts`
+/// against `volpath`, every component, on the smoke puff (the camera in vacuum, the smoke behind
+/// a null cube, a floor lit through it: gathering on the floor, the hand-off inside the cube's
+/// grid). Negative control: the hand-off with the smoke's density looked up half a cell off.
+#[test]
+fn path_traced_media_match_volpath_in_smoke() {
+    let scene = smoke_scene(false, 0.0);
+    let ml = ManyLightSettings { path_traced_media: PathTracedMedia::Heterogeneous, ..settings(&scene, 20) };
+    let reference = volpath_reference(&scene);
+    check_methods_with(&scene, &reference, "smoke puff, path-traced: ", &ml, 48, true);
+    let perturbed = smoke_scene(false, 0.5);
+    let vrl = VrlIntegrator::new(&perturbed, ml.clone(), 1).unwrap();
+    let wrong = render_passes(&perturbed, &vrl, 192, 1, 1);
+    let caught = Component::ALL.iter().any(|&comp| {
+        let (r, mean_z) = compare(&wrong, &reference, comp);
+        println!("path-traced, density half a cell off, {}: {r}; image-mean z = {mean_z:.2}", comp.name());
+        r.failed_fraction() > 0.01 || mean_z.abs() > 5.0
+    });
+    assert!(caught, "path-traced smoke: the density lookup half a cell off went unnoticed");
+}
+
+/// The hand-off in every medium (`path_traced_media = all`) on the hazy room with a glass ball
+/// under a large lamp (`tests/data/caustic-room.xml`, 16 x 12): the camera starts in the haze, so
+/// volpath's walk makes every path but the caustics seen directly, which the caustic paths
+/// splat; the hand-off must leave to them exactly the area-emitter hits behind a delta chain
+/// from a directly seen vertex (`HandOff`), or those caustics count twice or never. Against
+/// `volpath`, every component, all four methods. Negative control: splats 20% too bright (a
+/// fifth of the caustics that a wrong hand-off would double) fail the same test.
+#[test]
+fn path_traced_media_leave_the_caustics_seen_directly_to_the_caustic_paths() {
+    let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/caustic-room.xml"));
+    (scene.camera.width, scene.camera.height) = (16, 12);
+    let ml = ManyLightSettings { path_traced_media: PathTracedMedia::All, ..settings(&scene, 20) };
+    let reference = volpath_reference(&scene);
+    check_methods_with(&scene, &reference, "caustic room, path-traced: ", &ml, 48, true);
+    let brighter = TestControls { caustic_scale: 1.2, ..TestControls::default() };
+    let vrl = VrlIntegrator::with_test_controls(&scene, ml.clone(), 1, brighter).unwrap();
+    let wrong = render_passes(&scene, &vrl, 48, 16, 1);
+    let (r, mean_z) = compare(&wrong, &reference, Component::Surface);
+    println!("path-traced, caustic splats x 1.2, surface: {r}; image-mean z = {mean_z:.2}");
+    assert!(
+        r.failed_fraction() > 0.01 || mean_z.abs() > 5.0,
+        "path-traced caustic room: splats 20% too bright went unnoticed"
+    );
 }
 
 /// The caustic paths in a heterogeneous medium (their beams and splatted points with

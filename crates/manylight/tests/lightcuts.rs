@@ -10,8 +10,8 @@
 //!   tests, with no extra tolerance.
 
 use haze_manylight::integrators::{
-    CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls,
-    VrlIntegrator, Vrls,
+    CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, PathTracedMedia,
+    VplIntegrator, Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_manylight::tree::cut::CutSettings;
@@ -36,6 +36,7 @@ fn ml(scene: &Scene, paths: u64) -> ManyLightSettings {
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         caustic_paths: None,
         compensated_clamp: None,
+        path_traced_media: PathTracedMedia::None,
     }
 }
 

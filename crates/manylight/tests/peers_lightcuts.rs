@@ -87,7 +87,7 @@ mod compare_support;
 mod rule;
 
 use haze_manylight::integrators::{
-    LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, Vrls,
+    LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, PathTracedMedia, Vrls,
 };
 use haze_render::progressive::{render, RenderSettings};
 use haze_scene::{load_file, LoadOptions};
@@ -122,8 +122,13 @@ fn suite_held(scene: &str, held: Held) {
     let scene = load_file(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     let spp = (SAMPLE_BUDGET / (w * h)).max(2) as u32;
-    // The light-path settings (path-length rule) of the other comparisons with volpath.
-    let ml = ManyLightSettings { budget: LightBudget::Vrls(VRLS), ..compare_support::settings(&scene, 1) };
+    // The light-path settings (path-length rule) of the other comparisons with volpath, and the
+    // media a user's render path-traces (the default).
+    let ml = ManyLightSettings {
+        budget: LightBudget::Vrls(VRLS),
+        path_traced_media: PathTracedMedia::default(),
+        ..compare_support::settings(&scene, 1)
+    };
     let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, LightcutSettings::default(), 0)
         .unwrap_or_else(|e| panic!("{stem}: vrl_lightcuts refuses the scene: {e}"));
     let settings = RenderSettings { spp, seed: 0, spp_per_pass: 1, ..Default::default() };

@@ -19,7 +19,8 @@
 //! conservative).
 
 use haze_manylight::integrators::{
-    LightBudget, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator, Vrls,
+    LightBudget, LightcutsIntegrator, ManyLightSettings, PathTracedMedia, VplIntegrator, Vpls, VrlIntegrator,
+    Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
@@ -102,6 +103,7 @@ fn render_with(scene: &Scene, method: &str, spp: u32, paths: u64, seed: u64) -> 
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         caustic_paths: None,
         compensated_clamp: None,
+        path_traced_media: PathTracedMedia::None,
     };
     let lc = Default::default();
     match method {

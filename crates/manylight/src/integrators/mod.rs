@@ -15,6 +15,7 @@ pub use vpl::VplIntegrator;
 pub use vrl::{TestControls, VrlIntegrator};
 
 use crate::camera::{estimator_medium, CameraSegment};
+pub use crate::gather::PathTracedMedia;
 use crate::lighttrace::{paths_for_vrl_count, trace_light_paths, LightSet, LightTraceSettings};
 use crate::vrl::VrlMedium;
 use haze_core::streams::SURFACE_VPL_INDEX;
@@ -45,6 +46,9 @@ pub struct ManyLightSettings {
     /// and the clamped part recovered by the compensation walk (`crate::gather`, Kollig &
     /// Keller 2004): unbiased, without the rare huge samples of VPLs near the point.
     pub compensated_clamp: Option<f32>,
+    /// The media in which the camera walk path-traces instead of gathering
+    /// (`crate::gather::PathTracedMedia`).
+    pub path_traced_media: PathTracedMedia,
 }
 
 /// The caustic-path tracer of `settings` for `scene`, if the scene has caustics to trace.

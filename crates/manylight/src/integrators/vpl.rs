@@ -7,7 +7,7 @@ use super::{
     surface_vpls, surface_vpls_to_point, surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
 use crate::camera::CameraSegment;
-use crate::gather::{whole_path_radiance, Gather, GatherPoint};
+use crate::gather::{whole_path_radiance, Gather, GatherPoint, PathTracedMedia};
 use crate::lighttrace::VplRecord;
 use crate::splat::{CameraSplats, CausticTracer};
 use crate::vpl::SurfaceVpl;
@@ -156,6 +156,10 @@ impl Gather for VplGather<'_> {
 
     fn compensated_clamp(&self) -> Option<f32> {
         self.integrator.settings.compensated_clamp
+    }
+
+    fn path_traced_media(&self) -> PathTracedMedia {
+        self.integrator.settings.path_traced_media
     }
 
     fn point(&self, gp: &GatherPoint, _key: u64) -> Rgb {

@@ -7,7 +7,7 @@ use super::{
     surface_vpls_to_point, surface_vpls_to_segment, ManyLightSettings, PassTracer,
 };
 use crate::camera::CameraSegment;
-use crate::gather::{whole_path_radiance, Gather, GatherPoint};
+use crate::gather::{whole_path_radiance, Gather, GatherPoint, PathTracedMedia};
 use crate::lighttrace::VrlRecord;
 use crate::splat::{CameraSplats, CausticTracer};
 use crate::vpl::SurfaceVpl;
@@ -190,6 +190,10 @@ impl Gather for VrlGather<'_> {
 
     fn compensated_clamp(&self) -> Option<f32> {
         self.integrator.settings.compensated_clamp
+    }
+
+    fn path_traced_media(&self) -> PathTracedMedia {
+        self.integrator.settings.path_traced_media
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {

@@ -12,7 +12,9 @@
 //! because all pixels of one pass share its lights and are correlated.
 #![allow(dead_code)]
 
-use haze_manylight::integrators::{LightBudget, ManyLightSettings, VplIntegrator, VrlIntegrator};
+use haze_manylight::integrators::{
+    LightBudget, ManyLightSettings, PathTracedMedia, VplIntegrator, VrlIntegrator,
+};
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
 use haze_render::{Component, Film, Integrator, VolPath};
@@ -117,12 +119,16 @@ pub fn judge(failures: &mut Vec<String>, what: &str, r: &ZTestReport, mean_z: f6
     }
 }
 
+/// `paths` light paths per pass, gathering in every medium (`PathTracedMedia::None`): the tests
+/// built on it check the gather's estimators, heterogeneous ones included; the hand-off to
+/// volpath has tests of its own (`tests/integrators.rs`, `path_traced_media_*`).
 pub fn settings(scene: &Scene, paths: u64) -> ManyLightSettings {
     ManyLightSettings {
         budget: LightBudget::Paths(paths),
         trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
         caustic_paths: None,
         compensated_clamp: None,
+        path_traced_media: PathTracedMedia::None,
     }
 }
 
@@ -151,18 +157,23 @@ pub fn check_methods_against(
     passes: u32,
     lightcuts: bool,
 ) {
-    let vrl =
-        render_passes(scene, &VrlIntegrator::new(scene, settings(scene, paths), 1).unwrap(), passes, 1, 1);
-    let vpl = render_passes(
-        scene,
-        &VplIntegrator::new(scene, settings(scene, paths), 2, None).unwrap(),
-        passes,
-        1,
-        2,
-    );
+    check_methods_with(scene, reference, label, &settings(scene, paths), passes, lightcuts);
+}
+
+/// [`check_methods_against`] with the many-light settings `ml`.
+pub fn check_methods_with(
+    scene: &Scene,
+    reference: &Passes,
+    label: &str,
+    ml: &ManyLightSettings,
+    passes: u32,
+    lightcuts: bool,
+) {
+    let vrl = render_passes(scene, &VrlIntegrator::new(scene, ml.clone(), 1).unwrap(), passes, 1, 1);
+    let vpl = render_passes(scene, &VplIntegrator::new(scene, ml.clone(), 2, None).unwrap(), passes, 1, 2);
     let mut methods = vec![("vrl", vrl), ("vpl", vpl)];
     if lightcuts {
-        let (vrl_lc, vpl_lc) = lightcut_renders(scene, paths, passes, Default::default(), [5, 6]);
+        let (vrl_lc, vpl_lc) = lightcut_renders_with(scene, ml, passes, Default::default(), [5, 6]);
         methods.extend([("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]);
     }
     let mut failures = Vec::new();
@@ -184,8 +195,18 @@ pub fn lightcut_renders(
     lc: haze_manylight::integrators::LightcutSettings,
     seeds: [u64; 2],
 ) -> (Passes, Passes) {
+    lightcut_renders_with(scene, &settings(scene, paths), passes, lc, seeds)
+}
+
+/// [`lightcut_renders`] with the many-light settings `ml`.
+pub fn lightcut_renders_with(
+    scene: &Scene,
+    ml: &ManyLightSettings,
+    passes: u32,
+    lc: haze_manylight::integrators::LightcutSettings,
+    seeds: [u64; 2],
+) -> (Passes, Passes) {
     use haze_manylight::integrators::{LightcutsIntegrator, Vpls, Vrls};
-    let ml = settings(scene, paths);
     let a = render_passes(
         scene,
         &LightcutsIntegrator::<Vrls>::new(scene, ml.clone(), lc, seeds[0]).unwrap(),
@@ -195,7 +216,7 @@ pub fn lightcut_renders(
     );
     let b = render_passes(
         scene,
-        &LightcutsIntegrator::<Vpls>::new(scene, ml, lc, seeds[1]).unwrap(),
+        &LightcutsIntegrator::<Vpls>::new(scene, ml.clone(), lc, seeds[1]).unwrap(),
         passes,
         1,
         seeds[1],

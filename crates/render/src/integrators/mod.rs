@@ -4,7 +4,7 @@ mod nee;
 mod volpath;
 
 pub use nee::{surface_nee, transmittance_to, transmittance_to_sampled, SurfaceMis};
-pub use volpath::VolPath;
+pub use volpath::{HandOff, PathState, VolPath};
 
 use crate::components::PathRadiance;
 use haze_core::{Ray, Rgb, Sampler};

@@ -25,11 +25,13 @@
 use super::nee::{surface_nee, transmittance_to_sampled, SurfaceMis};
 use super::Integrator;
 use crate::components::{Component, PathRadiance};
+use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::{free_flight_at, free_flight_distance, hero_channel, FreeFlight};
 use haze_core::{Ray, Rgb, Sampler};
 use haze_scene::accel::Leaving;
+use haze_scene::bsdf::BsdfSample;
 use haze_scene::hetero::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
 
@@ -64,31 +66,141 @@ impl Integrator for VolPath {
         &self,
         scene: &Scene,
         _pass: &(),
-        mut ray: Ray,
-        mut medium: Option<MediumId>,
+        ray: Ray,
+        medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
         let mut out = PathRadiance::default();
+        let hero = hero_channel(sampler.next_1d());
+        self.trace(scene, PathState::camera(ray, medium, hero), sampler, &mut out);
+        out
+    }
+}
+
+/// The state of a volpath walk between vertices: where it goes (`ray` in `medium`), what it
+/// carries, and what it needs for roulette, the depth rule and MIS. A path from the camera
+/// starts with [`PathState::camera`]; the many-light methods' camera walk hands a path over in
+/// the middle (`haze_manylight::gather`, the media it path-traces) with its own counts.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    pub ray: Ray,
+    pub medium: Option<MediumId>,
+    /// Throughput `f / p_hero`.
+    pub beta: Rgb,
+    /// The pdf ratios `r_c = p_c / p_hero` of the path so far (path-level spectral MIS).
+    pub r: Rgb,
+    pub hero: usize,
+    /// Product of the relative IORs crossed (for roulette, as Mitsuba's `volpath`).
+    pub eta: f32,
+    /// Scattering events so far (medium and non-null surface), the depth rule's count.
+    pub depth: u32,
+    pub medium_events: u32,
+    pub surface_events: u32,
+    /// Every scattering so far was specular: an emitter hit now is not MIS-weighted, because
+    /// next-event estimation could not have found it.
+    pub specular_chain: bool,
+    /// The pdf and position of the last non-specular sampling, for MIS at emitter hits.
+    pub last_pdf: f32,
+    pub last_p: Vec3,
+    /// The next query is a camera ray's, answered from the scene's camera grid.
+    pub first_query: bool,
+    /// The shape the current ray cannot hit, having left it (`Scene::leaving`).
+    pub leaving: Leaving,
+    /// The emitter hits another estimator counts (none for a path of volpath's own).
+    pub hand_off: HandOff,
+}
+
+impl PathState {
+    /// A camera path along `ray` from `medium`, its hero channel `hero`.
+    pub fn camera(ray: Ray, medium: Option<MediumId>, hero: usize) -> PathState {
+        PathState {
+            ray,
+            medium,
+            beta: Rgb::ONE,
+            r: Rgb::ONE,
+            hero,
+            eta: 1.0,
+            depth: 0,
+            medium_events: 0,
+            surface_events: 0,
+            specular_chain: true,
+            last_pdf: 1.0,
+            last_p: ray.o,
+            first_query: true,
+            leaving: Leaving::NONE,
+            hand_off: HandOff::default(),
+        }
+    }
+}
+
+/// The emitter hits of a path handed over by the many-light camera walk that the walk's other
+/// strategies count, so that each path is counted once (`docs/theory.md` §2.1).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct HandOff {
+    /// Skip every emitter hit until the next non-null sample or medium event: the walk passed a
+    /// rough interface, whose next-event estimation (no MIS) counted them.
+    pub skip_all: bool,
+    /// Skip area emitters until the next non-delta event: they lie behind a delta chain from a
+    /// vertex the camera sees directly, light tracing's caustic paths splat them.
+    pub skip_area: bool,
+    /// The camera sees the path's current end directly (no direction change so far), and the
+    /// caustic paths splat such vertices' delta-chain light.
+    pub direct: bool,
+    /// The last event was such a directly seen non-delta vertex, with no delta sample since:
+    /// a delta sample now starts `skip_area`.
+    pub pending: bool,
+}
+
+impl HandOff {
+    /// A medium event.
+    #[inline]
+    fn scattered(&mut self) {
+        self.skip_all = false;
+        self.skip_area = false;
+        self.pending = std::mem::take(&mut self.direct);
+    }
+
+    /// A surface sample `bs` (a `null` one changes nothing: not an event, no new direction).
+    #[inline]
+    fn sampled(&mut self, bs: &BsdfSample) {
+        if bs.null {
+            return;
+        }
+        self.skip_all = false;
+        if bs.specular {
+            if std::mem::take(&mut self.pending) {
+                self.skip_area = true;
+            }
+            self.direct = false;
+        } else {
+            self.scattered();
+        }
+    }
+}
+
+impl VolPath {
+    /// Walks the path `st` to its end, adding its contributions to `out`: free flight, null
+    /// crossings, next-event estimation with MIS, phase and BSDF sampling, roulette.
+    pub fn trace(&self, scene: &Scene, st: PathState, sampler: &mut Sampler, out: &mut PathRadiance) {
         // `-1` (unlimited) and anything longer stop at the hard cap, `MAX_PATH_DEPTH`.
         let max_depth = haze_scene::depth_limit(self.max_depth);
-        // Throughput f/p_hero and the pdf ratios r_c = p_c/p_hero of the path so far.
-        let mut beta = Rgb::ONE;
-        let mut r = Rgb::ONE;
-        let hero = hero_channel(sampler.next_1d());
-        let mut eta = 1.0f32;
-        let mut depth = 0u32;
-        let (mut medium_events, mut surface_events) = (0u32, 0u32);
-        // True while every scattering so far was specular: emitters hit then are not MIS-weighted
-        // because NEE could not have found them.
-        let mut specular_chain = true;
-        let mut last_pdf = 1.0f32;
-        let mut last_p = ray.o;
-        // The path's first query is usually a camera ray's (the render loop's), which the
-        // scene answers from its camera grid; `intersect_camera` checks that it is one.
-        let mut first_query = true;
-        // The shape the current ray cannot hit, having left it (`Scene::leaving`).
-        let mut leaving = Leaving::NONE;
-
+        let PathState {
+            mut ray,
+            mut medium,
+            mut beta,
+            mut r,
+            hero,
+            mut eta,
+            mut depth,
+            mut medium_events,
+            mut surface_events,
+            mut specular_chain,
+            mut last_pdf,
+            mut last_p,
+            mut first_query,
+            mut leaving,
+            mut hand_off,
+        } = st;
         loop {
             if depth > self.rr_depth {
                 let m = (beta / r.mean()).max_component() * eta * eta;
@@ -155,6 +267,7 @@ impl Integrator for VolPath {
                 match flight {
                     Flight::Scatter { t, weight, ratio } => {
                         let p = ray.at(t);
+                        hand_off.scattered();
                         beta *= weight;
                         r *= ratio;
                         depth += 1;
@@ -207,7 +320,9 @@ impl Integrator for VolPath {
             let visible = !(depth == 0 && self.hide_emitters);
 
             let Some(h) = hit.map(|h| scene.interaction(&h)) else {
-                if visible && count_direct {
+                if hand_off.skip_all {
+                    // Counted by the other estimator's next-event estimation (`HandOff`).
+                } else if visible && count_direct {
                     // Weight 1: no pdf needed (an environment map's pdf is a lookup in its
                     // sampling table, a cache miss, for every escaping camera or glass path).
                     for e in scene.emitters.iter().filter(|e| e.is_environment()) {
@@ -222,7 +337,7 @@ impl Integrator for VolPath {
                 break;
             };
 
-            if visible {
+            if visible && !hand_off.skip_all && !hand_off.skip_area {
                 if let Some((e, le)) = scene.area_radiance(h.shape, h.n, -ray.d) {
                     let w = if count_direct {
                         1.0
@@ -270,6 +385,7 @@ impl Integrator for VolPath {
             eta *= bs.eta;
             let d = frame.to_world(bs.wo);
             surface_events += 1;
+            hand_off.sampled(&bs);
             // A null-typed sample (thindielectric transmission) is not a scattering event for
             // Mitsuba's volpath: no depth, and the MIS state of the last real vertex is kept.
             if !bs.null {
@@ -282,6 +398,5 @@ impl Integrator for VolPath {
             ray = Ray::new(offset_origin(h.p, h.n, d), d);
             leaving = scene.leaving(h.shape, h.n, d);
         }
-        out
     }
 }

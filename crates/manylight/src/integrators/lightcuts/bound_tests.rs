@@ -4,7 +4,7 @@
 //! and the heterogeneous estimators (ratio tracking, the distance mixture (T35)).
 
 use super::*;
-use crate::integrators::LightBudget;
+use crate::integrators::{LightBudget, PathTracedMedia};
 use crate::lighttrace::LightTraceSettings;
 use crate::tree::bound::for_each_light;
 use crate::vrl::Segment;
@@ -62,6 +62,7 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
         trace: LightTraceSettings::from_max_depth(-1),
         caustic_paths: None,
         compensated_clamp: None,
+        path_traced_media: PathTracedMedia::None,
     };
     let settings = LightcutSettings { strategy: CutStrategy::Bound, bound: kind, ..Default::default() };
     let lc = LightcutsIntegrator::<K>::new(scene, ml, settings, seed).unwrap();

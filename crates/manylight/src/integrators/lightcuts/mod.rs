@@ -26,7 +26,7 @@ use super::{
     surface_vpls, ManyLightSettings,
 };
 use crate::camera::CameraSegment;
-use crate::gather::{whole_path_radiance, Gather, GatherPoint};
+use crate::gather::{whole_path_radiance, Gather, GatherPoint, PathTracedMedia};
 use crate::lighttrace::trace_light_paths;
 use crate::splat::{CameraSplats, CausticTracer};
 use crate::tree::bound::{BoundContext, BoundKind, ThetaBound};
@@ -560,6 +560,10 @@ impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
 
     fn compensated_clamp(&self) -> Option<f32> {
         self.integrator.ml.compensated_clamp
+    }
+
+    fn path_traced_media(&self) -> PathTracedMedia {
+        self.integrator.ml.path_traced_media
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
