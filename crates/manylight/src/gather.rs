@@ -159,6 +159,9 @@ struct Walk {
     /// The chain passed a rough interface (`Bsdf::is_rough_interface`) and no delta vertex
     /// since: next-event estimation there counted the emitters this chain could hit.
     after_rough: bool,
+    /// The ray is the camera's (not yet queried): the scene answers it from its camera grid
+    /// (`Scene::intersect_camera`, the tree's answer).
+    camera_ray: bool,
 }
 
 /// How a chain ended.
@@ -197,6 +200,7 @@ pub(crate) fn whole_path_radiance(
         may_split: gather.split(),
         compensate_from: None,
         after_rough: false,
+        camera_ray: true,
     };
     CHAIN.with_borrow_mut(|chain| {
         chain.clear();
@@ -408,14 +412,19 @@ fn walk_chain(
         return ChainEnd::Stop;
     }
     for _ in 0..haze_core::walk::MAX_CHAIN_VERTICES {
-        let hit = scene.intersect(&st.ray);
+        // Before the intersection, which volpath's walk makes itself (a heterogeneous medium's
+        // grid beyond the surface, or missed, only means that volpath's walk passes it).
+        if st.gathering && st.medium.is_some_and(|m| gather.path_traced_media().covers(scene.medium(m))) {
+            hand_off(scene, st, gather, sampler, out);
+            return ChainEnd::Stop;
+        }
+        let hit = if std::mem::take(&mut st.camera_ray) {
+            scene.intersect_camera(&st.ray).map(|h| scene.interaction(&h))
+        } else {
+            scene.intersect(&st.ray)
+        };
         let len = hit.map_or(st.ray.t_max, |h| h.t);
         if let Some(m) = st.medium {
-            let med = scene.medium(m);
-            if st.gathering && gather.path_traced_media().covers(med) && enters(med, &st.ray, len) {
-                hand_off(scene, st, gather, sampler, out);
-                return ChainEnd::Stop;
-            }
             let segment = |seg: Segment| ChainSegment {
                 cs: CameraSegment { seg, medium: m, tr_before: st.beta, events: st.events },
                 after_surface: st.surface_seen,
@@ -542,16 +551,7 @@ fn walk_chain(
     ChainEnd::Stop
 }
 
-/// True if the ray's first `len` crosses a part of `medium` that can scatter (a heterogeneous
-/// medium's majorant grid, T27).
-fn enters(medium: &Medium, ray: &Ray, len: f32) -> bool {
-    match medium.hetero.as_deref() {
-        None => len > 0.0,
-        Some(h) => h.clip(ray.o, ray.d, 0.0, len).is_some(),
-    }
-}
-
-/// The rest of the path of the gathering chain `st`, which enters a path-traced medium, by
+/// The rest of the path of the gathering chain `st`, whose ray starts in a path-traced medium, by
 /// volpath's walk: its throughput, event counts and component class carry over, and the emitter
 /// hits that the walk's other strategies count are left to them (`HandOff`): after a rough
 /// interface its next-event estimation's, behind a delta chain from a vertex the camera sees
@@ -568,7 +568,7 @@ fn hand_off(scene: &Scene, st: &Walk, gather: &impl Gather, sampler: &mut Sample
         // Before a surface event every event was a medium event (`Component::classify`).
         medium_events: st.events,
         surface_events: st.surface_seen as u32,
-        first_query: false,
+        first_query: st.camera_ray,
         hand_off: HandOff {
             skip_all: st.after_rough,
             skip_area: st.skip_area_emitters,
