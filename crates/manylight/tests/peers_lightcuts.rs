@@ -85,8 +85,9 @@
 //! backdrop's `surface`, gathered from the VRLs and surface VPLs the smoke makes. Still held to
 //! the mean with the defaults; with `compensated_clamp` 1 as well (its `1/d^2` tail is what
 //! remains): hetero_sigmat 3, hetero_sigmat_albedo 3, surf_area_light 17, all three held to the
-//! whole rule in that configuration (`*_compensated`); homo_emitter_inside_medium 25 either way
-//! (a homogeneous ball, gathered). `compensated_clamp` is not the default: its `c` is in scene
+//! whole rule in that configuration (`*_compensated`); homo_emitter_inside_medium 25 either way,
+//! and 26 with `path_traced_media` `all` (the ball's medium path-traced too): its tail is the
+//! backdrop's gathering of the lights inside the dense ball, not the camera's medium segments. `compensated_clamp` is not the default: its `c` is in scene
 //! units and its cost at equal time on the homogeneous scenes is not measured.
 //!
 //! homo_roughdielectric_spot passes since the camera walk passes rough interfaces instead of
