@@ -119,6 +119,19 @@ pub fn judge(failures: &mut Vec<String>, what: &str, r: &ZTestReport, mean_z: f6
     }
 }
 
+/// A negative control's verdict: true if `wrong` fails the z-test of [`judge`] (more than 1% of
+/// the channel-pixels, or an image mean more than 5 standard errors off) against `reference` in
+/// any component; every component's line is printed, prefixed with `what`.
+pub fn caught_in_any_component(wrong: &Passes, reference: &Passes, what: &str) -> bool {
+    let mut caught = false;
+    for comp in Component::ALL {
+        let (r, mean_z) = compare(wrong, reference, comp);
+        println!("{what}, {}: {r}; image-mean z = {mean_z:.2}", comp.name());
+        caught |= r.failed_fraction() > 0.01 || mean_z.abs() > 5.0;
+    }
+    caught
+}
+
 /// `paths` light paths per pass, gathering in every medium (`PathTracedMedia::None`): the tests
 /// built on it check the gather's estimators, heterogeneous ones included; the hand-off to
 /// volpath has tests of its own (`tests/integrators.rs`, `path_traced_media_*`).
