@@ -145,7 +145,7 @@ def render(
     caustic_paths: int | None = None,
     vpl_clamp: float | None = None,
     clamp: float | None = None,
-    compensated_clamp: float | None = None,
+    compensated_clamp: float | str | None = None,
     path_traced_media: str | None = None,
     cut: str | None = None,
     cut_size: int | None = None,

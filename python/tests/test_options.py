@@ -94,9 +94,14 @@ def test_every_option_is_used_or_rejected_naming_it_and_the_method(small_box):
     scene = haze.load_scene(small_box)
     for method in haze.METHOD_NAMES:
         for name, o in TABLE.items():
-            value = {"count": int, "integer": int, "number": float, "choice": str, "flag": lambda s: s == "true"}[
-                o["kind"]
-            ](o["example"])
+            value = {
+                "count": int,
+                "integer": int,
+                "number": float,
+                "number or word": float,
+                "choice": str,
+                "flag": lambda s: s == "true",
+            }[o["kind"]](o["example"])
             if method in o["methods"]:
                 given = {name: value}
                 if o["requires"] is not None:
@@ -112,6 +117,12 @@ def test_every_option_is_used_or_rejected_naming_it_and_the_method(small_box):
         scene.render("vrl_lightcuts", spp=1, cut="bound", max_cut=0)
     with pytest.raises(ValueError, match="bound must be 'paper', 'conservative' or 'tight', got 'foo'"):
         scene.render("vrl_lightcuts", spp=1, cut="bound", bound="foo")
+    with pytest.raises(ValueError, match="compensated_clamp must be a positive number or 'auto' or 'off', got 'on'"):
+        scene.render("vrl", spp=1, compensated_clamp="on")
+    assert TABLE["compensated_clamp"]["choices"] == ["auto", "off"]
+    assert TABLE["compensated_clamp"]["default"] == "auto"
+    for given in ("auto", "off", 4.0):
+        assert scene._inner.check_options("vpl", compensated_clamp=given) == "vpl"
     with pytest.raises(ValueError, match="epsilon must be a number >= 0, got 'nan'"):
         scene.render("vrl_lightcuts", spp=1, cut="bound", epsilon=float("nan"))
     with pytest.raises(ValueError, match=r"max_cut does not apply to vrl_lightcuts with cut stochastic \(only with cut bound\)"):

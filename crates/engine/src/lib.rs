@@ -23,4 +23,4 @@ pub use haze_manylight as manylight;
 pub use haze_render as render;
 pub use haze_scene as scene;
 pub use methods::{method_kind, prepare, replacement_note, Method};
-pub use options::{method_names, MethodKind, MethodOptions, Options, Spelling, OPTIONS};
+pub use options::{method_names, CompensatedClamp, MethodKind, MethodOptions, Options, Spelling, OPTIONS};

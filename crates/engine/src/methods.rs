@@ -93,7 +93,7 @@ impl Method {
             budget: options.budget,
             trace: LightTraceSettings::from_max_depth(scene.integrator.max_depth),
             caustic_paths: options.caustic_paths,
-            compensated_clamp: options.compensated_clamp,
+            compensated_clamp: options.compensated_clamp.for_scene(scene, options.clamp),
             path_traced_media: options.path_traced_media,
         };
         // Name the method in a refusal (e.g. an environment emitter): "integrator 'vrl': ...".

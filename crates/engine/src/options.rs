@@ -98,6 +98,8 @@ pub enum Kind {
     NonNegative,
     /// A finite number > 0.
     Positive,
+    /// A finite number > 0 or one of these words.
+    PositiveOr(&'static [&'static str]),
     /// A time budget in seconds: at least a millisecond (no pass could finish in less) and at
     /// most a year (a `Duration` of 1e20 s does not exist).
     Seconds,
@@ -178,6 +180,13 @@ impl Kind {
                 .filter(|x| *x > 0.0)
                 .map(Value::Float)
                 .ok_or_else(|| "must be a positive number".into()),
+            Kind::PositiveOr(words) => match words.iter().find(|w| **w == t) {
+                Some(w) => Ok(Value::Word(w)),
+                None => number().filter(|x| *x > 0.0).map(Value::Float).ok_or_else(|| {
+                    let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
+                    format!("must be a positive number or {}", quoted.join(" or "))
+                }),
+            },
             Kind::Seconds => {
                 const MIN: f64 = 1e-3;
                 const MAX: f64 = 365.0 * 24.0 * 3600.0;
@@ -213,6 +222,7 @@ impl Kind {
             Kind::Count { .. } => "count",
             Kind::Integer => "integer",
             Kind::NonNegative | Kind::Positive | Kind::Seconds => "number",
+            Kind::PositiveOr(_) => "number or word",
             Kind::Choice(_) => "choice",
             Kind::Flag => "flag",
         }
@@ -499,19 +509,27 @@ pub const OPTIONS: &[OptionSpec] = &[
     },
     OptionSpec {
         name: "compensated_clamp",
-        kind: Kind::Positive,
-        default: Default::Unset("off"),
+        kind: Kind::PositiveOr(&["auto", "off"]),
+        default: Default::Value("auto"),
         help: "Clamp the 1/d^2 of surface VPL -> surface point connections at this value and \
                recover the clamped part with a BSDF-sampled path from the point (Kollig & Keller \
                2004): unbiased, fewer fireflies near corners, at the cost of a second gather \
-               where surfaces are closer than 1/sqrt(value) (docs/theory.md 2.1).",
+               where surfaces are closer than 1/sqrt(value) (docs/theory.md 2.1). 'auto': \
+               (6/R)^2, R the radius of the scene's bounding sphere (off where `clamp` is given); \
+               'off': unclamped.",
         applies_to: MethodKind::MANY_LIGHT,
         conflicts_with: &["clamp"],
         requires: None,
         scope: Scope::Method,
         example: "25",
-        set: |o, v| o.method.compensated_clamp = Some(v.float() as f32),
-        get: |o| o.method.compensated_clamp.map(|c| c.to_string()),
+        set: |o, v| {
+            o.method.compensated_clamp = match v {
+                Value::Word("auto") => CompensatedClamp::Auto,
+                Value::Word(_) => CompensatedClamp::Off,
+                v => CompensatedClamp::At(v.float() as f32),
+            }
+        },
+        get: |o| Some(o.method.compensated_clamp.to_string()),
     },
     OptionSpec {
         name: "path_traced_media",
@@ -718,7 +736,7 @@ pub struct MethodOptions {
     pub clamp: Option<f32>,
     /// Every many-light method: clamp of surface VPL -> surface point connections, the clamped
     /// part recovered by a compensation walk (unbiased).
-    pub compensated_clamp: Option<f32>,
+    pub compensated_clamp: CompensatedClamp,
     pub lightcuts: LightcutSettings,
     /// Caustic paths per pass (`None`: one per pixel; 0: the camera continuation instead).
     pub caustic_paths: Option<u64>,
@@ -739,6 +757,42 @@ impl MethodOptions {
             None => scene.sampler,
         };
         spec.with_sample_count(spp.unwrap_or(scene.spp))
+    }
+}
+
+/// The `compensated_clamp` option: where the `1/d^2` of surface VPL -> surface point
+/// connections is clamped, the clamped part recovered by the compensation walk
+/// (`haze_manylight::gather`, docs/theory.md §2.1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CompensatedClamp {
+    /// Relative to the scene's size ([`haze_manylight::integrators::scene_compensated_clamp`]),
+    /// off where the biased `clamp` is given (the two clamp the same connections).
+    Auto,
+    Off,
+    /// At this `c` (`1/d^2` clamped below the distance `1/sqrt(c)`, in scene units).
+    At(f32),
+}
+
+impl CompensatedClamp {
+    /// The clamp `c` for a render of `scene` whose biased clamp is `clamp` (`None`: off).
+    pub fn for_scene(self, scene: &Scene, clamp: Option<f32>) -> Option<f32> {
+        match self {
+            CompensatedClamp::Auto if clamp.is_none() => {
+                Some(haze_manylight::integrators::scene_compensated_clamp(scene))
+            }
+            CompensatedClamp::At(c) => Some(c),
+            CompensatedClamp::Auto | CompensatedClamp::Off => None,
+        }
+    }
+}
+
+impl fmt::Display for CompensatedClamp {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CompensatedClamp::Auto => f.write_str("auto"),
+            CompensatedClamp::Off => f.write_str("off"),
+            CompensatedClamp::At(c) => write!(f, "{c}"),
+        }
     }
 }
 
@@ -808,7 +862,7 @@ impl Options {
                 budget: LightBudget::Vrls(1),
                 vpl_clamp: None,
                 clamp: None,
-                compensated_clamp: None,
+                compensated_clamp: CompensatedClamp::Off,
                 lightcuts: LightcutSettings::default(),
                 caustic_paths: None,
                 path_traced_media: PathTracedMedia::None,
@@ -976,7 +1030,8 @@ mod tests {
         assert_eq!(o.method.lightcuts.stochastic.cut_size, 3);
         assert_eq!(
             o.describe(VplLightcuts),
-            "vrls=10000 path_traced_media=heterogeneous cut=stochastic cut_size=3 light_samples=1 builder=agglomerative"
+            "vrls=10000 compensated_clamp=auto path_traced_media=heterogeneous cut=stochastic cut_size=3 light_samples=1 \
+             builder=agglomerative"
         );
     }
 
@@ -1112,12 +1167,53 @@ mod tests {
     #[test]
     fn describe_shows_the_method_options_in_effect() {
         assert_eq!(Options::defaults().describe(VolPath), "");
-        assert_eq!(Options::defaults().describe(Vpl), "vrls=10000 path_traced_media=heterogeneous");
+        assert_eq!(
+            Options::defaults().describe(Vpl),
+            "vrls=10000 compensated_clamp=auto path_traced_media=heterogeneous"
+        );
         assert_eq!(
             ok(VrlLightcuts, &[("light_paths", "5"), ("max_cut", "9")]).describe(VrlLightcuts),
-            "light_paths=5 path_traced_media=heterogeneous cut=bound epsilon=0.02 max_cut=9 bound=paper \
+            "light_paths=5 compensated_clamp=auto path_traced_media=heterogeneous cut=bound epsilon=0.02 max_cut=9 bound=paper \
              builder=agglomerative"
         );
+    }
+
+    /// `compensated_clamp`: `auto` by default, `(6/R)^2` for the scene's bounding radius `R`
+    /// (the same image for a scene scaled by any factor), off where the biased `clamp` is
+    /// given; `off` and a value as given; other words refused with what the option takes.
+    #[test]
+    fn compensated_clamp_is_scene_relative_by_default() {
+        let (small, large) = (box_scene(1.0), box_scene(1000.0));
+        let r = small.bounding_sphere().radius;
+        let c = |given: &[(&str, &str)], scene: &Scene| {
+            let o = resolve(Vrl, given, Spelling::Keyword).unwrap();
+            o.method.compensated_clamp.for_scene(scene, o.method.clamp)
+        };
+        let auto = c(&[], &small).expect("on by default");
+        assert!((auto - 36.0 / (r * r)).abs() <= 1e-5 * auto, "{auto} for R {r}");
+        let scaled = c(&[], &large).unwrap();
+        assert!((scaled * 1e6 / auto - 1.0).abs() < 1e-4, "{scaled} is not {auto} / 1000^2");
+        assert_eq!(c(&[("compensated_clamp", "auto")], &small), Some(auto));
+        assert_eq!(c(&[("compensated_clamp", "off")], &small), None);
+        assert_eq!(c(&[("compensated_clamp", "2.5")], &large), Some(2.5));
+        assert_eq!(c(&[("clamp", "10")], &small), None);
+        for bad in ["0", "-1", "nan", "on", "Auto"] {
+            assert_eq!(
+                err(Vrl, &[("compensated_clamp", bad)], Spelling::Flag),
+                format!("--compensated-clamp must be a positive number or 'auto' or 'off', got '{bad}'")
+            );
+        }
+    }
+
+    /// A scene whose geometry is a cube of half-size `size` (bounding radius `size * sqrt 3`).
+    fn box_scene(size: f32) -> Scene {
+        let xml = format!(
+            r#"<scene version="3.0.0"><sensor type="perspective"/>
+               <shape type="cube"><transform name="to_world"><scale value="{size}"/></transform></shape>
+               </scene>"#
+        );
+        let p = std::path::Path::new("t.xml");
+        haze_scene::load_str(&xml, p, std::path::Path::new("."), &haze_scene::LoadOptions::default()).unwrap()
     }
 
     /// A scene rendering `width` x `height` pixels.

@@ -117,8 +117,8 @@ fn trace_lights<'py>(
 }
 
 /// The engine's table of options (`haze_engine::options::OPTIONS`), one dict per option:
-/// `name`, `flag` (`--max-cut`), `kind` (`count`, `integer`, `number`, `choice`, `flag`),
-/// `choices` (a list, or None), `default` (the default as text, or None when unset),
+/// `name`, `flag` (`--max-cut`), `kind` (`count`, `integer`, `number`, `number or word`,
+/// `choice`, `flag`), `choices` (the words a `choice` or `number or word` takes, or None), `default` (the default as text, or None when unset),
 /// `default_doc` (what the default is, in words), `help` (with the methods and the default),
 /// `methods` (the methods it applies to), `scope` (`render`, `pass` or `method`), `conflicts_with`,
 /// `requires` (`None` or `(option, value)`: the option applies only with that value),
@@ -134,7 +134,11 @@ fn method_options(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
             d.set_item("name", o.name)?;
             d.set_item("flag", o.flag())?;
             d.set_item("kind", o.kind.label())?;
-            d.set_item("choices", if let Kind::Choice(c) = o.kind { Some(c.to_vec()) } else { None })?;
+            let choices = match o.kind {
+                Kind::Choice(c) | Kind::PositiveOr(c) => Some(c.to_vec()),
+                _ => None,
+            };
+            d.set_item("choices", choices)?;
             let (default, doc) = match o.default {
                 Default::Value(v) => (Some(v), v),
                 Default::Unset(what) => (None, what),

@@ -51,6 +51,25 @@ pub struct ManyLightSettings {
     pub path_traced_media: PathTracedMedia,
 }
 
+/// The clamp distance of the scene-relative `compensated_clamp` (the default, `auto`), as a
+/// fraction of the radius `R` of the scene's bounding sphere: surface VPL -> surface point
+/// connections shorter than `R / COMPENSATED_CLAMP_DIVISOR` are clamped and their clamped part
+/// recovered by the compensation walk (`crate::gather`, (T12e) of docs/theory.md §2.1).
+/// Chosen on measurements (docs/theory.md §2.1, "The compensated clamp"): on Mitsuba 3's media
+/// test scenes (`R` 6.3) the distance 1 (`R / 6.3`) removes the heavy tails of the backdrop's
+/// gathering, and at equal time distances of `R / 2.8` to `R / 3.9` (`c = 1` on scenes of
+/// `R` 2.8 to 3.9) were neutral on three homogeneous scenes.
+pub const COMPENSATED_CLAMP_DIVISOR: f32 = 6.0;
+
+/// The scene-relative `compensated_clamp` of `scene`: `c = (COMPENSATED_CLAMP_DIVISOR / R)^2`,
+/// the `1/d^2` clamp of the distance `R / COMPENSATED_CLAMP_DIVISOR` (`R` > 0 always,
+/// `BoundingSphere::around`). Relative, so that a scene modelled in millimetres and the same
+/// scene in metres render alike.
+pub fn scene_compensated_clamp(scene: &Scene) -> f32 {
+    let d = scene.bounding_sphere().radius / COMPENSATED_CLAMP_DIVISOR;
+    1.0 / (d * d)
+}
+
 /// The caustic-path tracer of `settings` for `scene`, if the scene has caustics to trace.
 pub(crate) fn caustic_tracer(
     scene: &Scene,
