@@ -132,3 +132,29 @@ fn principled_matches_mitsuba() {
     let r = compare(&scene, "principled");
     assert!(!r.passed(0.005, 5.0), "an isotropic metal went unnoticed: {r}");
 }
+
+/// Mitsuba 3's `mesh_attribute`: a per-vertex colour blended across each triangle as a diffuse
+/// reflectance, a per-face weight as a `blendbsdf` weight (PLY meshes, `scenes/meshes`).
+/// Controls, each of which must fail: the vertex colours replaced by their mean, and the face
+/// weights by theirs (the same average brightness, without the attribute's pattern).
+#[test]
+fn mesh_attribute_matches_mitsuba() {
+    use haze_scene::texture::Texture;
+    let scene = load("mesh-attribute");
+    let r = compare(&scene, "mesh-attribute");
+    assert!(r.passed(0.005, 5.0), "does not match Mitsuba 3: {r}");
+
+    let mut flat_colour = load("mesh-attribute");
+    let Bsdf::Diffuse { reflectance } = &flat_colour.shapes[0].bsdf else { panic!("a diffuse") };
+    assert!(matches!(reflectance, Texture::MeshAttribute(_)), "the vertex colours");
+    flat_colour.shapes[0].bsdf = Bsdf::Diffuse { reflectance: Texture::Constant(reflectance.mean()) };
+    let r = compare(&flat_colour, "mesh-attribute");
+    assert!(!r.passed(0.005, 5.0), "vertex colours replaced by their mean went unnoticed: {r}");
+
+    let mut flat_weight = scene;
+    let Bsdf::Blend(b) = &mut flat_weight.shapes[1].bsdf else { panic!("a blendbsdf") };
+    assert!(matches!(b.weight, Texture::MeshAttribute(_)), "the face weights");
+    b.weight = Texture::Constant(b.weight.mean());
+    let r = compare(&flat_weight, "mesh-attribute");
+    assert!(!r.passed(0.005, 5.0), "face weights replaced by their mean went unnoticed: {r}");
+}

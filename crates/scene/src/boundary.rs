@@ -218,7 +218,7 @@ impl Scene {
     fn perturb(&self, h: SurfaceInteraction, p: &crate::bsdf::Perturbed) -> SurfaceInteraction {
         let geometry = &self.shapes[h.shape as usize].geometry;
         let (dp_du, dp_dv) = crate::shape::tangents::uv_tangents(geometry, h.prim, h.p, h.n);
-        SurfaceInteraction { ns: p.shading_normal(h.uv, h.n, h.ns, dp_du, dp_dv), ..h }
+        SurfaceInteraction { ns: p.shading_normal(h.tex(), h.n, h.ns, dp_du, dp_dv), ..h }
     }
 
     #[cold]

@@ -18,6 +18,7 @@ pub mod lights;
 pub mod marched;
 pub mod media_bounds;
 pub mod medium;
+pub mod mesh_attribute;
 pub mod projector;
 pub mod scene;
 pub mod shape;

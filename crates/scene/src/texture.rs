@@ -1,10 +1,13 @@
-//! Reflectance textures (Mitsuba 3 plugins: a constant spectrum, `checkerboard`, `bitmap`).
+//! Reflectance textures (Mitsuba 3 plugins: a constant spectrum, `checkerboard`, `bitmap`,
+//! `mesh_attribute`).
 //!
-//! A texture maps the surface parameterisation `uv` of a hit to an RGB value. Only the
-//! reflectance-like parameters of the BSDFs take one (`diffuse.reflectance`,
-//! `plastic.diffuse_reflectance`, ...).
+//! A texture maps a hit ([`TexPoint`]: its surface parameterisation `uv`, and its triangle and
+//! barycentrics for `mesh_attribute`) to an RGB value. Only the reflectance-like parameters of
+//! the BSDFs take one (`diffuse.reflectance`, `plastic.diffuse_reflectance`, ...).
 
 use crate::bitmap::Bitmap;
+use crate::mesh_attribute::MeshAttribute;
+pub use crate::mesh_attribute::TexPoint;
 use glam::{Affine2, Mat2, Vec2};
 use haze_core::Rgb;
 use std::sync::Arc;
@@ -19,6 +22,9 @@ pub enum Texture {
     Checkerboard { color0: Rgb, color1: Rgb, to_uv: Affine2 },
     /// Mitsuba 3's `bitmap`: an image (shared by every BSDF that refers to it).
     Bitmap(Arc<Bitmap>),
+    /// Mitsuba 3's `mesh_attribute`: a vertex or face attribute of the one mesh this texture
+    /// is bound to, times its `scale`.
+    MeshAttribute(Arc<MeshAttribute>),
 }
 
 impl From<Rgb> for Texture {
@@ -28,8 +34,11 @@ impl From<Rgb> for Texture {
 }
 
 impl Texture {
-    /// The value at surface coordinates `uv`.
-    pub fn eval(&self, uv: Vec2) -> Rgb {
+    /// The value at `at` (a [`TexPoint`], or the surface coordinates `uv` alone).
+    #[inline]
+    pub fn eval(&self, at: impl Into<TexPoint>) -> Rgb {
+        let at = at.into();
+        let uv = at.uv;
         match self {
             Texture::Constant(c) => *c,
             Texture::Checkerboard { color0, color1, to_uv } => {
@@ -42,6 +51,7 @@ impl Texture {
                 }
             }
             Texture::Bitmap(b) => b.eval(uv),
+            Texture::MeshAttribute(a) => a.eval(at),
         }
     }
 
@@ -54,7 +64,12 @@ impl Texture {
     /// in `eval` but on different sides in `eval_1`, so every one-number use (a roughness, a
     /// mask's opacity, a blend weight) sees the pattern shifted by one square. haze does the
     /// same so that scenes render as in Mitsuba (a textured-roughness scene was 27% off before).
-    pub fn eval_1(&self, uv: Vec2) -> f32 {
+    ///
+    /// A three-channel `mesh_attribute` gives 0 ([`MeshAttribute::eval_1`], as Mitsuba 3.9.1).
+    #[inline]
+    pub fn eval_1(&self, at: impl Into<TexPoint>) -> f32 {
+        let at = at.into();
+        let uv = at.uv;
         match self {
             Texture::Checkerboard { color0, color1, to_uv } => {
                 let p = to_uv.transform_point2(uv);
@@ -65,17 +80,20 @@ impl Texture {
                     color1.luminance()
                 }
             }
-            _ => self.eval(uv).luminance(),
+            Texture::MeshAttribute(a) => a.eval_1(at),
+            _ => self.eval(at).luminance(),
         }
     }
 
     /// The gradient of [`Self::eval_1`] with respect to `uv` (Mitsuba's `eval_1_grad`): zero
     /// for a constant and for the piecewise constant `checkerboard` (as Mitsuba's), the
-    /// bilinear interpolant's for a bitmap ([`Bitmap::eval_1_grad`]).
-    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+    /// bilinear interpolant's for a bitmap ([`Bitmap::eval_1_grad`]). Zero for a mesh
+    /// attribute too (Mitsuba 3's `mesh_attribute` has no `eval_1_grad`: a bump map of one is
+    /// an error there).
+    pub fn eval_1_grad(&self, at: impl Into<TexPoint>) -> Vec2 {
         match self {
-            Texture::Constant(_) | Texture::Checkerboard { .. } => Vec2::ZERO,
-            Texture::Bitmap(b) => b.eval_1_grad(uv),
+            Texture::Constant(_) | Texture::Checkerboard { .. } | Texture::MeshAttribute(_) => Vec2::ZERO,
+            Texture::Bitmap(b) => b.eval_1_grad(at.into().uv),
         }
     }
 
@@ -86,6 +104,7 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Checkerboard { color0, color1, .. } => (*color0 + *color1) * 0.5,
             Texture::Bitmap(b) => b.mean(),
+            Texture::MeshAttribute(a) => a.mean(),
         }
     }
 
@@ -95,6 +114,7 @@ impl Texture {
             Texture::Constant(c) => c.is_black(),
             Texture::Checkerboard { color0, color1, .. } => color0.is_black() && color1.is_black(),
             Texture::Bitmap(b) => b.range() == (0.0, 0.0),
+            Texture::MeshAttribute(a) => a.range() == (0.0, 0.0),
         }
     }
 
@@ -107,6 +127,7 @@ impl Texture {
                 color0.max_component().max(color1.max_component()),
             ),
             Texture::Bitmap(b) => b.range(),
+            Texture::MeshAttribute(a) => a.range(),
         }
     }
 }

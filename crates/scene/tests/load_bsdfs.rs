@@ -132,9 +132,15 @@ fn bad_bsdf_and_texture_parameters() {
     let e = err(r#"<bsdf type="twosided"><bsdf type="diffuse"/><bsdf type="null"/></bsdf>"#);
     assert!(e.contains("different BSDF on each side"), "{e}");
     let e = err(r#"<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf>"#);
+    assert!(e.contains("a mesh_attribute needs 'name'"), "{e}");
+    let e = err(
+        r#"<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_color"/></texture></bsdf>"#,
+    );
+    assert!(e.contains("<shape type=\"sphere\"> at line 3 is not a mesh"), "{e}");
+    let e = err(r#"<bsdf type="diffuse"><texture type="noise" name="reflectance"/></bsdf>"#);
     assert!(
         e.contains(
-            "unsupported texture type 'mesh_attribute' (supported: rawconstant, checkerboard, bitmap)"
+            "unsupported texture type 'noise' (supported: rawconstant, checkerboard, bitmap, mesh_attribute)"
         ),
         "{e}"
     );

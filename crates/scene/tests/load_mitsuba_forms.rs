@@ -419,12 +419,12 @@ fn masks_wrap_one_bsdf_with_an_opacity() {
     ) else {
         panic!("a mask")
     };
-    assert_eq!(m.alpha(glam::Vec2::ZERO), 0.25);
+    assert_eq!(m.alpha(glam::Vec2::ZERO.into()), 0.25);
     assert!(matches!(*m.nested, haze_scene::Bsdf::Conductor(_)));
     let Ok(haze_scene::Bsdf::Mask(m)) = bsdf_of(r#"<bsdf type="mask"><bsdf type="diffuse"/></bsdf>"#) else {
         panic!("a mask")
     };
-    assert_eq!(m.alpha(glam::Vec2::ZERO), 0.5, "Mitsuba's default opacity");
+    assert_eq!(m.alpha(glam::Vec2::ZERO.into()), 0.5, "Mitsuba's default opacity");
     for (xml, want) in [
         (r#"<bsdf type="mask"/>"#, "a mask needs one nested or referenced <bsdf>"),
         (

@@ -1,10 +1,11 @@
 //! Shadow rays through media and index-matched (`null`) boundaries.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::accel::{Leaving, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
+use haze_scene::texture::TexPoint;
 use haze_scene::{Boundary, Bsdf, MediumId, Scene};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
@@ -173,7 +174,7 @@ fn transmittance_impl(
         if !shape.bsdf.is_null() {
             // A thin dielectric: its transmittance needs the shading normal and uv.
             let si = scene.shadow_interaction(h);
-            tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.uv);
+            tr *= crossing_factor(&shape.bsdf, ray.d, si.ns, si.tex());
         }
         i += 1;
         if scene.shadow_touches(shape_id, h) {
@@ -188,7 +189,7 @@ fn transmittance_impl(
                 let other = &scene.shapes[other as usize];
                 if !other.bsdf.is_null() {
                     let si = scene.shadow_interaction(&hits[i]);
-                    tr *= crossing_factor(&other.bsdf, ray.d, si.ns, si.uv);
+                    tr *= crossing_factor(&other.bsdf, ray.d, si.ns, si.tex());
                 }
                 boundary = boundary.with(other, n);
                 i += 1;
@@ -238,7 +239,7 @@ fn shadow_ray(origin: Vec3, target: Option<Vec3>, d: Vec3) -> Option<Ray> {
 /// normal `ns`: 1 for `null`, a thin dielectric's transmittance (Mitsuba's
 /// `eval_null_transmission`), 0 for any other surface (it blocks).
 #[inline]
-fn crossing_factor(bsdf: &Bsdf, d: Vec3, ns: Vec3, uv: Vec2) -> Rgb {
+fn crossing_factor(bsdf: &Bsdf, d: Vec3, ns: Vec3, uv: TexPoint) -> Rgb {
     if bsdf.is_null() {
         Rgb::ONE
     } else {
@@ -285,8 +286,8 @@ pub fn surface_nee(
     let wo = frame.to_local(es.wi);
     // The pdf only where the MIS weight needs it, computed with `f` (shared terms).
     let (f, bsdf_pdf) = match mis {
-        SurfaceMis::PowerHeuristic if !es.is_delta => shape.bsdf.eval_pdf(wi, wo, h.uv),
-        _ => (shape.bsdf.eval(wi, wo, h.uv), 0.0),
+        SurfaceMis::PowerHeuristic if !es.is_delta => shape.bsdf.eval_pdf(wi, wo, h.tex()),
+        _ => (shape.bsdf.eval(wi, wo, h.tex()), 0.0),
     };
     if f.is_black() {
         return Rgb::ZERO;
@@ -352,7 +353,7 @@ fn transmittance_segments(
         }
         let Some(h) = hit else { return tr };
         let shape = &scene.shapes[h.shape as usize];
-        tr *= crossing_factor(&shape.bsdf, ray.d, h.ns, h.uv);
+        tr *= crossing_factor(&shape.bsdf, ray.d, h.ns, h.tex());
         if tr.is_black() {
             return Rgb::ZERO;
         }

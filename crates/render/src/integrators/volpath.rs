@@ -377,7 +377,8 @@ impl VolPath {
 
             // With delta lights only, `bs.pdf` (`last_pdf`) weighs nothing: not computed.
             let with_pdf = !scene.bsdf_pdfs_unused();
-            let Some(bs) = shape.bsdf.sample_with(wi, sampler.next_1d(), sampler.next_2d(), h.uv, with_pdf)
+            let Some(bs) =
+                shape.bsdf.sample_with(wi, sampler.next_1d(), sampler.next_2d(), h.tex(), with_pdf)
             else {
                 break;
             };

@@ -251,7 +251,16 @@ fn analytic_hit(a: &Analytic, ray: &Ray) -> Option<PreliminaryHit> {
                 phi * 0.5 * haze_core::INV_PI + 0.5,
                 n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI,
             );
-            Some(PreliminaryHit(Hit::Done(SurfaceInteraction { t, p, n, ns: n, uv, shape: *shape, prim: 0 })))
+            Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
+                t,
+                p,
+                n,
+                ns: n,
+                uv,
+                shape: *shape,
+                prim: 0,
+                bary: Vec2::ZERO,
+            })))
         }
         Analytic::Disk { shape, to_world, inv, normal } => {
             let (t, local) = intersect_disk(ray, to_world, inv)?;
@@ -264,6 +273,7 @@ fn analytic_hit(a: &Analytic, ray: &Ray) -> Option<PreliminaryHit> {
                 uv,
                 shape: *shape,
                 prim: 0,
+                bary: Vec2::ZERO,
             })))
         }
     }
@@ -783,7 +793,7 @@ impl Accel {
             }
             None => Vec2::new(b1, b2),
         };
-        SurfaceInteraction { t, p, n, ns, uv, shape: tri.shape, prim: tri.prim }
+        SurfaceInteraction { t, p, n, ns, uv, shape: tri.shape, prim: tri.prim, bary: Vec2::new(b1, b2) }
     }
 
     pub fn occluded(&self, ray: &Ray) -> bool {

@@ -12,6 +12,7 @@
 //! to one where they do.
 
 use super::{Bsdf, BsdfSample};
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::Rgb;
@@ -26,17 +27,17 @@ pub struct Blend {
 
 impl Blend {
     /// `w` at `uv`.
-    pub fn weight(&self, uv: Vec2) -> f32 {
+    pub fn weight(&self, uv: TexPoint) -> f32 {
         self.weight.eval_1(uv).clamp(0.0, 1.0)
     }
 
     /// The nested BSDFs with their blend weights `(1 - w, w)`.
-    fn lobes(&self, uv: Vec2) -> [(&Bsdf, f32); 2] {
+    fn lobes(&self, uv: TexPoint) -> [(&Bsdf, f32); 2] {
         let w = self.weight(uv);
         [(&self.nested[0], 1.0 - w), (&self.nested[1], w)]
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint, with_pdf: bool) -> Option<BsdfSample> {
         let w = self.weight(uv);
         // Mitsuba's split of `u1`: `f_1` on `u1 <= w`, each part rescaled to [0, 1).
         let (chosen, p, u) = if u1 <= w && w > 0.0 {
@@ -52,15 +53,15 @@ impl Blend {
         (pdf > 0.0).then(|| BsdfSample { weight: f / pdf, pdf, ..s })
     }
 
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         self.lobes(uv).iter().map(|(b, w)| b.eval(wi, wo, uv) * *w).fold(Rgb::ZERO, |a, b| a + b)
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         self.lobes(uv).iter().map(|(b, w)| b.pdf(wi, wo, uv) * *w).sum()
     }
 
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         self.lobes(uv).iter().fold((Rgb::ZERO, 0.0), |(f, pdf), (b, w)| {
             let (fb, pb) = b.eval_pdf(wi, wo, uv);
             (f + fb * *w, pdf + pb * *w)
@@ -68,7 +69,7 @@ impl Blend {
     }
 
     /// `(1 - w) t_0 + w t_1` of the nested BSDFs' straight-through transmissions.
-    pub fn null_transmission(&self, wi: Vec3, uv: Vec2) -> Rgb {
+    pub fn null_transmission(&self, wi: Vec3, uv: TexPoint) -> Rgb {
         self.lobes(uv).iter().map(|(b, w)| b.null_transmission(wi, uv) * *w).fold(Rgb::ZERO, |a, b| a + b)
     }
 }

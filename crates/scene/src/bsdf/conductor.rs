@@ -6,6 +6,7 @@
 use super::microfacet::Microfacet;
 use super::roughness::Roughness;
 use super::{reflect, BsdfSample};
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::Rgb;
@@ -59,7 +60,7 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 
 impl Conductor {
     /// The Fresnel reflectance per channel at `cos_i`, times `specular_reflectance` at `uv`.
-    fn fresnel(&self, cos_i: f32, uv: Vec2) -> Rgb {
+    fn fresnel(&self, cos_i: f32, uv: TexPoint) -> Rgb {
         let f = Rgb::new(
             fresnel_conductor(cos_i, self.eta[0], self.k[0]),
             fresnel_conductor(cos_i, self.eta[1], self.k[1]),
@@ -68,7 +69,7 @@ impl Conductor {
         f * self.specular_reflectance.eval(uv)
     }
 
-    pub fn sample(&self, wi: Vec3, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u2: Vec2, uv: TexPoint) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -94,13 +95,13 @@ impl Conductor {
 
     /// `f(wi, wo) cos(wo) = F(wi.m) D(m) G(wi, wo, m) / (4 cos_i)` with `m` the half vector
     /// (zero for the smooth conductor and below the surface).
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         let Some(distr) = &self.distr else { return Rgb::ZERO };
         self.eval_with(&distr.at(uv), wi, wo, uv)
     }
 
     /// [`Self::eval`] of the rough conductor with the distribution at the hit.
-    fn eval_with(&self, distr: &Microfacet, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    fn eval_with(&self, distr: &Microfacet, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Rgb::ZERO;
         }
@@ -114,7 +115,7 @@ impl Conductor {
     }
 
     /// Solid-angle density of [`Self::sample`] producing `wo`.
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         let Some(distr) = &self.distr else { return 0.0 };
         let distr = distr.at(uv);
         if wi.z <= 0.0 || wo.z <= 0.0 {

@@ -3,6 +3,7 @@
 //! rays cross with `1 - opacity` (Mitsuba's `eval_null_transmission`).
 
 use super::{Bsdf, BsdfSample};
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::Rgb;
@@ -16,14 +17,14 @@ pub struct Mask {
 
 impl Mask {
     /// The opacity at `uv`: the luminance of the texture's value ([`Texture::eval_1`]).
-    pub fn alpha(&self, uv: Vec2) -> f32 {
+    pub fn alpha(&self, uv: TexPoint) -> f32 {
         self.opacity.eval_1(uv).clamp(0.0, 1.0)
     }
 
     /// The nested BSDF with probability `alpha` (its sample, pdf times `alpha`, weight
     /// unchanged: `alpha` cancels), else straight through with weight 1 and probability
     /// `1 - alpha`.
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint, with_pdf: bool) -> Option<BsdfSample> {
         let a = self.alpha(uv);
         if u1 < a {
             let s = self.nested.sample_with(wi, u1 / a, u2, uv, with_pdf)?;
@@ -32,15 +33,15 @@ impl Mask {
         Some(BsdfSample { null: true, ..BsdfSample::specular(-wi, Rgb::ONE, 1.0 - a, true) })
     }
 
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         self.nested.eval(wi, wo, uv) * self.alpha(uv)
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         self.nested.pdf(wi, wo, uv) * self.alpha(uv)
     }
 
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         let (f, pdf) = self.nested.eval_pdf(wi, wo, uv);
         let a = self.alpha(uv);
         (f * a, pdf * a)

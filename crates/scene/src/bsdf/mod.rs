@@ -41,6 +41,7 @@ pub use roughdielectric::RoughDielectric;
 pub use roughness::Roughness;
 pub use roughplastic::RoughPlastic;
 
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -199,7 +200,8 @@ impl Bsdf {
     /// Samples `wo` given `wi` (both local, `z` = shading normal, `wi` pointing away from the
     /// surface towards the previous vertex) at surface coordinates `uv`. `u1` picks the lobe,
     /// `u2` the direction within it.
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: impl Into<TexPoint>) -> Option<BsdfSample> {
+        let uv: TexPoint = uv.into();
         self.sample_with(wi, u1, u2, uv, true)
     }
 
@@ -209,7 +211,15 @@ impl Bsdf {
     /// and a masking term) and reports `pdf` 0. Direction and weight are the same either way,
     /// except that a normal whose density underflows (`D(m) cos(m) <= 1e-20`) is rejected only
     /// when the pdf is computed.
-    pub fn sample_with(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
+    pub fn sample_with(
+        &self,
+        wi: Vec3,
+        u1: f32,
+        u2: Vec2,
+        uv: impl Into<TexPoint>,
+        with_pdf: bool,
+    ) -> Option<BsdfSample> {
+        let uv: TexPoint = uv.into();
         match self {
             Bsdf::Null => Some(BsdfSample { null: true, ..BsdfSample::specular(-wi, Rgb::ONE, 1.0, true) }),
             Bsdf::Diffuse { reflectance } => {
@@ -237,7 +247,8 @@ impl Bsdf {
     }
 
     /// `f(wi, wo) |cos(wo)|` of the non-specular lobes (zero for specular ones).
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: impl Into<TexPoint>) -> Rgb {
+        let uv: TexPoint = uv.into();
         match self {
             Bsdf::Diffuse { reflectance } if wi.z > 0.0 && wo.z > 0.0 => {
                 reflectance.eval(uv) * (INV_PI * wo.z)
@@ -299,7 +310,8 @@ impl Bsdf {
 
     /// Solid-angle pdf of [`Self::sample`] producing `wo` through a non-specular lobe (zero
     /// for specular BSDFs).
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: impl Into<TexPoint>) -> f32 {
+        let uv: TexPoint = uv.into();
         match self {
             Bsdf::Diffuse { .. } if wi.z > 0.0 && wo.z > 0.0 => cosine_hemisphere_pdf(wo.z),
             Bsdf::RoughDielectric(b) => b.pdf(wi, wo, uv),
@@ -320,7 +332,8 @@ impl Bsdf {
     /// `(`[`Self::eval`]`, `[`Self::pdf`]`)` of one direction, for next-event estimation
     /// with MIS, sharing what both compute (half vector, microfacet density, Fresnel terms)
     /// where the BSDF has such terms. The same values as the two calls.
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: impl Into<TexPoint>) -> (Rgb, f32) {
+        let uv: TexPoint = uv.into();
         match self {
             Bsdf::Plastic(b) => b.eval_pdf(wi, wo, uv),
             Bsdf::RoughPlastic(b) => b.eval_pdf(wi, wo, uv),
@@ -349,7 +362,8 @@ impl Bsdf {
         }
     }
 
-    pub fn null_transmission(&self, wi: Vec3, uv: Vec2) -> Rgb {
+    pub fn null_transmission(&self, wi: Vec3, uv: impl Into<TexPoint>) -> Rgb {
+        let uv: TexPoint = uv.into();
         match self {
             Bsdf::Null => Rgb::ONE,
             Bsdf::ThinDielectric { eta } => Rgb::splat(1.0 - thindielectric::reflectance(*eta, wi.z)),

@@ -17,8 +17,9 @@
 //! into the surface, where the geometry usually blocks them anyway.
 
 use super::Bsdf;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Perturbation {
@@ -37,7 +38,7 @@ pub struct Perturbed {
 impl Perturbed {
     /// The perturbed shading normal at `uv` (see the module's formulas); `ns` unchanged where
     /// the result is degenerate (zero or not finite).
-    pub fn shading_normal(&self, uv: Vec2, n: Vec3, ns: Vec3, dp_du: Vec3, dp_dv: Vec3) -> Vec3 {
+    pub fn shading_normal(&self, uv: TexPoint, n: Vec3, ns: Vec3, dp_du: Vec3, dp_dv: Vec3) -> Vec3 {
         let perturbed = match &self.perturbation {
             Perturbation::NormalMap(texture) => {
                 let c = texture.eval(uv);
@@ -71,6 +72,7 @@ mod tests {
     use super::*;
     use crate::bitmap::{Bitmap, FilterType, WrapMode};
     use glam::Affine2;
+    use glam::Vec2;
     use haze_core::Rgb;
     use std::sync::Arc;
 
@@ -84,16 +86,19 @@ mod tests {
     fn normal_map_turns_the_normal_in_tangent_space() {
         let (n, du, dv) = (Vec3::Z, Vec3::new(2.0, 0.0, 0.3), Vec3::new(0.0, 3.0, 0.0));
         let flat = perturbed(Perturbation::NormalMap(Rgb::new(0.5, 0.5, 1.0).into()));
-        assert!((flat.shading_normal(Vec2::ZERO, n, n, du, dv) - n).length() < 1e-6);
+        assert!((flat.shading_normal((Vec2::ZERO).into(), n, n, du, dv) - n).length() < 1e-6);
         // (2c - 1) = (0.6, 0, 0.8): 36.87 degrees towards s = +x (dp/du without its normal part).
         let tilted = perturbed(Perturbation::NormalMap(Rgb::new(0.8, 0.5, 0.9).into()));
-        let m = tilted.shading_normal(Vec2::ZERO, n, n, du, dv);
+        let m = tilted.shading_normal((Vec2::ZERO).into(), n, n, du, dv);
         assert!((m - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6, "{m}");
         // Green along t = n x s = +y.
         let green = perturbed(Perturbation::NormalMap(Rgb::new(0.5, 0.8, 0.9).into()));
-        assert!((green.shading_normal(Vec2::ZERO, n, n, du, dv) - Vec3::new(0.0, 0.6, 0.8)).length() < 1e-6);
+        assert!(
+            (green.shading_normal((Vec2::ZERO).into(), n, n, du, dv) - Vec3::new(0.0, 0.6, 0.8)).length()
+                < 1e-6
+        );
         let constant = perturbed(Perturbation::BumpMap { height: Rgb::splat(0.7).into(), scale: 5.0 });
-        assert!((constant.shading_normal(Vec2::ZERO, n, n, du, dv) - n).length() < 1e-6);
+        assert!((constant.shading_normal((Vec2::ZERO).into(), n, n, du, dv) - n).length() < 1e-6);
     }
 
     /// A height ramp `h = a u` over the plane `p = (u, v, 0)` is the surface `z = scale a u`,
@@ -113,10 +118,10 @@ mod tests {
         assert!((scaled.eval_1_grad(Vec2::new(0.3, 0.6)) - Vec2::new(11.2, -8.4)).length() < 1e-4);
         // At (0.5, 0.5), dh/du = 4 (times scale 0.1): normal (-0.4, -0.2, 1) normalised.
         let bump = perturbed(Perturbation::BumpMap { height: Texture::Bitmap(Arc::new(b)), scale: 0.1 });
-        let m = bump.shading_normal(Vec2::new(0.5, 0.5), Vec3::Z, Vec3::Z, Vec3::X, Vec3::Y);
+        let m = bump.shading_normal((Vec2::new(0.5, 0.5)).into(), Vec3::Z, Vec3::Z, Vec3::X, Vec3::Y);
         assert!((m - Vec3::new(-0.4, -0.2, 1.0).normalize()).length() < 1e-5, "{m}");
         // Seen from a geometric normal on the other side, it turns to that side.
-        let m = bump.shading_normal(Vec2::new(0.5, 0.5), -Vec3::Z, Vec3::Z, Vec3::X, Vec3::Y);
+        let m = bump.shading_normal((Vec2::new(0.5, 0.5)).into(), -Vec3::Z, Vec3::Z, Vec3::X, Vec3::Y);
         assert!(m.z < 0.0);
     }
 }

@@ -5,6 +5,7 @@
 
 use super::{reflect, BsdfSample};
 use crate::bsdf::fresnel_dielectric;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -58,7 +59,7 @@ impl Plastic {
     }
 
     /// The diffuse albedo after the internal reflections at the coating.
-    fn diffuse(&self, uv: Vec2) -> Rgb {
+    fn diffuse(&self, uv: TexPoint) -> Rgb {
         let r = self.diffuse_reflectance.eval(uv);
         if self.nonlinear {
             r.map(|c| c / (1.0 - c * self.fdr_int))
@@ -67,7 +68,7 @@ impl Plastic {
         }
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -87,7 +88,7 @@ impl Plastic {
     }
 
     /// The diffuse lobe, `f |cos wo|` (the specular one is a delta).
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Rgb::ZERO;
         }
@@ -103,13 +104,13 @@ impl Plastic {
     }
 
     /// [`Self::eval`] and [`Self::pdf`] with the Fresnel reflectance at `wi` computed once.
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         self.eval_and::<true>(wi, wo, uv)
     }
 
     /// `(f |cos wo|, pdf)`, the pdf only `if PDF` (else 0: `eval` alone pays no division for it).
     #[inline(always)]
-    fn eval_and<const PDF: bool>(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    fn eval_and<const PDF: bool>(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Rgb::ZERO, 0.0);
         }
@@ -163,8 +164,8 @@ mod tests {
         for _ in 0..200 {
             let wi = haze_core::sampling::sample_cosine_hemisphere(s.next_2d());
             let wo = haze_core::sampling::sample_cosine_hemisphere(s.next_2d());
-            let a = b.eval(wi, wo, Vec2::ZERO) / wo.z;
-            let c = b.eval(wo, wi, Vec2::ZERO) / wi.z;
+            let a = b.eval(wi, wo, (Vec2::ZERO).into()) / wo.z;
+            let c = b.eval(wo, wi, (Vec2::ZERO).into()) / wi.z;
             assert!((a - c).max_component().abs() < 1e-5 * a.max_component().max(1.0));
         }
     }

@@ -8,6 +8,7 @@ use super::fresnel_dielectric;
 use super::microfacet::Microfacet;
 use super::roughness::Roughness;
 use super::BsdfSample;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -36,7 +37,7 @@ impl PPlastic {
         PPlastic { distr, eta, diffuse_reflectance, specular_reflectance, specular_weight }
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -50,11 +51,11 @@ impl PPlastic {
         (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample::glossy(wo, f / pdf, pdf))
     }
 
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         self.eval_pdf(wi, wo, uv).0
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         self.pdf_with(&self.distr.at(uv), wi, wo)
     }
 
@@ -70,7 +71,7 @@ impl PPlastic {
     }
 
     /// `(f cos_o, pdf)` of `wo`.
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Rgb::ZERO, 0.0);
         }

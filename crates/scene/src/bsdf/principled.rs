@@ -20,6 +20,7 @@ use super::disney::{
     Gtr1,
 };
 use super::BsdfSample;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -82,7 +83,7 @@ fn lobe_probs(p: &Principled, front: bool, brdf: f32, bsdf: f32, clearcoat: f32,
 }
 
 impl Principled {
-    fn at(&self, uv: Vec2) -> At {
+    fn at(&self, uv: TexPoint) -> At {
         At {
             base_color: self.base_color.eval(uv),
             roughness: self.roughness.eval_1(uv),
@@ -99,7 +100,7 @@ impl Principled {
         ((1.0 - a.metallic) * (1.0 - a.spec_trans), (1.0 - a.metallic) * a.spec_trans)
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint) -> Option<BsdfSample> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;
@@ -158,17 +159,17 @@ impl Principled {
         })
     }
 
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         self.eval_pdf(wi, wo, uv).0
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         self.eval_pdf(wi, wo, uv).1
     }
 
     /// `(f(wi, wo) |cos_o|, pdf)`, Mitsuba 3's `eval` and `pdf` (radiance transport: the
     /// transmission carries the `1 / eta^2` scaling).
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         let (cos_i, cos_o) = (wi.z, wo.z);
         if cos_i == 0.0 || cos_o == 0.0 {
             return (Rgb::ZERO, 0.0);
@@ -349,8 +350,8 @@ pub(super) mod tests {
         let mut s = Sampler::from_seed(5);
         let n = 200_000;
         let r = chi2_rotated(
-            || b.sample(wi, s.next_1d(), s.next_2d(), uv).map(|x| x.wo),
-            |d| other.pdf(wi, d, uv),
+            || b.sample(wi, s.next_1d(), s.next_2d(), uv.into()).map(|x| x.wo),
+            |d| other.pdf(wi, d, uv.into()),
             n,
         );
         assert!(!passed(&r, n), "a wrong roughness went unnoticed: {r}");

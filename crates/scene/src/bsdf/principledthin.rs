@@ -18,6 +18,7 @@ use super::disney::{
 };
 use super::microfacet::Microfacet;
 use super::BsdfSample;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -60,7 +61,7 @@ struct At {
 }
 
 impl PrincipledThin {
-    fn at(&self, uv: Vec2) -> At {
+    fn at(&self, uv: TexPoint) -> At {
         At {
             roughness: self.roughness.eval_1(uv),
             anisotropic: self.anisotropic.eval_1(uv),
@@ -89,7 +90,7 @@ impl PrincipledThin {
         ggx(a.anisotropic, (0.65 * eta - 0.35) * a.roughness)
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint) -> Option<BsdfSample> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;
@@ -136,16 +137,16 @@ impl PrincipledThin {
         })
     }
 
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         self.eval_pdf(wi, wo, uv).0
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         self.eval_pdf(wi, wo, uv).1
     }
 
     /// `(f(wi, wo) |cos_o|, pdf)`, Mitsuba 3's `eval` and `pdf`.
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         let cos_i = wi.z;
         if cos_i == 0.0 || wo.z == 0.0 {
             return (Rgb::ZERO, 0.0);

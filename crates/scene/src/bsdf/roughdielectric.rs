@@ -6,6 +6,7 @@ use super::microfacet::Microfacet;
 use super::roughness::Roughness;
 use super::BsdfSample;
 use crate::bsdf::fresnel_dielectric;
+use crate::mesh_attribute::TexPoint;
 use glam::{Vec2, Vec3};
 use haze_core::Rgb;
 
@@ -47,7 +48,7 @@ impl RoughDielectric {
 
     /// `with_pdf`: see [`super::Bsdf::sample_with`] (the pdf is skipped only with visible-normal
     /// sampling, whose weight does not need it).
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint, with_pdf: bool) -> Option<BsdfSample> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;
@@ -114,7 +115,7 @@ impl RoughDielectric {
     }
 
     /// `f(wi, wo) |cos(wo)|` (the same for every channel).
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         self.eval_with(&self.distr.at(uv), wi, wo)
     }
 
@@ -138,7 +139,7 @@ impl RoughDielectric {
         }
     }
 
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
         let (cos_i, cos_o) = (wi.z, wo.z);
         if cos_i == 0.0 || cos_o == 0.0 {
             return 0.0;
@@ -227,8 +228,8 @@ mod tests {
             for _ in 0..1000 {
                 let wi = haze_core::sampling::sample_uniform_sphere(s.next_2d());
                 let wo = haze_core::sampling::sample_uniform_sphere(s.next_2d());
-                let f_io = b.eval(wi, wo, Vec2::ZERO) / wo.z.abs();
-                let f_oi = b.eval(wo, wi, Vec2::ZERO) / wi.z.abs();
+                let f_io = b.eval(wi, wo, (Vec2::ZERO).into()) / wo.z.abs();
+                let f_oi = b.eval(wo, wi, (Vec2::ZERO).into()) / wi.z.abs();
                 let (ratio, expect) = if wi.z * wo.z > 0.0 {
                     (f_io, f_oi)
                 } else {

@@ -3,8 +3,8 @@
 //! one number (`Texture::eval_1`) at the hit's `uv`.
 
 use super::microfacet::Microfacet;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
-use glam::Vec2;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Roughness {
@@ -26,7 +26,7 @@ impl Roughness {
     /// [`Microfacet::anisotropic`]; Mitsuba 3 clamps the same way, so a texture value of 0 is a
     /// nearly smooth surface).
     #[inline]
-    pub fn at(&self, uv: Vec2) -> Microfacet {
+    pub fn at(&self, uv: TexPoint) -> Microfacet {
         match self {
             Roughness::Fixed(d) => *d,
             Roughness::Textured { base, alpha_u, alpha_v } => {

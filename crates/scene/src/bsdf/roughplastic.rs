@@ -6,6 +6,7 @@
 use super::microfacet::{Microfacet, MicrofacetType};
 use super::BsdfSample;
 use crate::bsdf::fresnel_dielectric;
+use crate::mesh_attribute::TexPoint;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -68,7 +69,7 @@ impl RoughPlastic {
         s / (s + d)
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, uv: TexPoint) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -86,7 +87,7 @@ impl RoughPlastic {
     }
 
     /// `f |cos wo|`: glossy coating reflection plus the diffuse base seen through it.
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
         self.eval_and::<false>(wi, wo, uv).0
     }
 
@@ -104,13 +105,13 @@ impl RoughPlastic {
     /// [`Self::eval`] and [`Self::pdf`] at once: the half vector, `D(h)`, the transmittance at
     /// `cos_i` and, with visible-normal sampling, `G1(wi, h)` computed once for both (the same
     /// arithmetic as apart, so the same bits).
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         self.eval_and::<true>(wi, wo, uv)
     }
 
     /// `(f |cos wo|, pdf)`, the pdf only `if PDF` (else 0).
     #[inline(always)]
-    fn eval_and<const PDF: bool>(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+    fn eval_and<const PDF: bool>(&self, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
         let (cos_i, cos_o) = (wi.z, wo.z);
         if cos_i <= 0.0 || cos_o <= 0.0 {
             return (Rgb::ZERO, 0.0);
@@ -306,7 +307,7 @@ mod tests {
         for (ci, co, want) in cases {
             let wi = Vec3::new((1.0 - ci * ci).sqrt(), 0.0, ci);
             let wo = Vec3::new(0.0, (1.0 - co * co).sqrt(), co);
-            let got = b.eval(wi, wo, Vec2::ZERO);
+            let got = b.eval(wi, wo, (Vec2::ZERO).into());
             for (g, w) in [got[0], got[1]].into_iter().zip(want) {
                 assert!((g / w - 1.0).abs() < 2e-3, "cos {ci}, {co}: {g} vs Mitsuba {w}");
             }
@@ -333,8 +334,8 @@ mod tests {
         for _ in 0..500 {
             let wi = sample_cosine_hemisphere(s.next_2d());
             let wo = sample_cosine_hemisphere(s.next_2d());
-            let a = b.eval(wi, wo, Vec2::ZERO) / wo.z;
-            let c = b.eval(wo, wi, Vec2::ZERO) / wi.z;
+            let a = b.eval(wi, wo, (Vec2::ZERO).into()) / wo.z;
+            let c = b.eval(wo, wi, (Vec2::ZERO).into()) / wi.z;
             assert!(
                 (a - c).max_component().abs() <= 1e-4 * a.max_component().max(1.0),
                 "{wi} {wo}: {a} vs {c}"

@@ -2,6 +2,7 @@
 //! surface sees the BSDF mirrored through it (`z` flipped for `wi` and `wo`).
 
 use super::{Bsdf, BsdfSample};
+use crate::mesh_attribute::TexPoint;
 use glam::{Vec2, Vec3};
 use haze_core::Rgb;
 
@@ -14,7 +15,14 @@ fn flip_z(v: Vec3) -> Vec3 {
     Vec3::new(v.x, v.y, -v.z)
 }
 
-pub(super) fn sample(b: &Bsdf, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: bool) -> Option<BsdfSample> {
+pub(super) fn sample(
+    b: &Bsdf,
+    wi: Vec3,
+    u1: f32,
+    u2: Vec2,
+    uv: TexPoint,
+    with_pdf: bool,
+) -> Option<BsdfSample> {
     if wi.z >= 0.0 {
         return b.sample_with(wi, u1, u2, uv, with_pdf);
     }
@@ -22,7 +30,7 @@ pub(super) fn sample(b: &Bsdf, wi: Vec3, u1: f32, u2: Vec2, uv: Vec2, with_pdf: 
     Some(BsdfSample { wo: flip_z(s.wo), ..s })
 }
 
-pub(super) fn eval(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
+pub(super) fn eval(b: &Bsdf, wi: Vec3, wo: Vec3, uv: TexPoint) -> Rgb {
     if wi.z >= 0.0 {
         b.eval(wi, wo, uv)
     } else {
@@ -30,7 +38,7 @@ pub(super) fn eval(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
     }
 }
 
-pub(super) fn eval_pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
+pub(super) fn eval_pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: TexPoint) -> (Rgb, f32) {
     if wi.z >= 0.0 {
         b.eval_pdf(wi, wo, uv)
     } else {
@@ -38,7 +46,7 @@ pub(super) fn eval_pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> (Rgb, f32) {
     }
 }
 
-pub(super) fn pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
+pub(super) fn pdf(b: &Bsdf, wi: Vec3, wo: Vec3, uv: TexPoint) -> f32 {
     if wi.z >= 0.0 {
         b.pdf(wi, wo, uv)
     } else {

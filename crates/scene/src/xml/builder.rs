@@ -4,6 +4,7 @@
 use super::context::Builder;
 use super::document::{Document, Element};
 use super::params::{Ids, VALUE_TAGS};
+use super::textures::MeshScope;
 use super::{bsdfs, emitters, integrator, media, plugins, sensor, shapes, textures, LoadError};
 use crate::camera::Camera;
 use crate::scene::{IntegratorSpec, Scene};
@@ -61,13 +62,17 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
             // Defined at the top level to be referenced; built here too, so that their errors
             // show even if nothing refers to them.
             "bsdf" => {
+                *doc.mesh_scope.borrow_mut() = MeshScope::Declaration;
                 bsdfs::build(&b.params(el)?)?;
+                *doc.mesh_scope.borrow_mut() = MeshScope::Outside;
             }
             "phase" => {
                 media::phase(&b.params(el)?)?;
             }
             "texture" => {
+                *doc.mesh_scope.borrow_mut() = MeshScope::Declaration;
                 textures::build(&b.params(el)?)?;
+                *doc.mesh_scope.borrow_mut() = MeshScope::Outside;
             }
             "volume" => {
                 media::volume(&b.params(el)?, "volume", (0.0, f32::INFINITY), b.doc)?;
@@ -102,6 +107,7 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
     let mut scene =
         Scene::new(Some(file.to_path_buf()), camera, spp, integrator, b.shapes, b.media, b.emitters);
     scene.sampler = sampler;
+    scene.mesh_attribute_textures = doc.mesh_attributes_used.get();
     Ok(scene)
 }
 

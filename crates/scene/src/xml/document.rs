@@ -34,6 +34,10 @@ pub(super) struct Document {
     /// Bitmap textures already loaded, by element: a texture referenced from several places
     /// is read once and shared.
     pub bitmaps: RefCell<HashMap<usize, std::sync::Arc<crate::bitmap::Bitmap>>>,
+    /// The mesh a `mesh_attribute` texture built now reads (the shape whose BSDF is being
+    /// built), and whether any did (`Scene::mesh_attribute_textures`).
+    pub(crate) mesh_scope: RefCell<super::textures::MeshScope>,
+    pub(crate) mesh_attributes_used: std::cell::Cell<bool>,
 }
 
 impl Document {
@@ -149,6 +153,8 @@ pub(super) fn parse(
         search_dirs: ctx.search_dirs,
         files: RefCell::new(ctx.files),
         bitmaps: RefCell::default(),
+        mesh_scope: RefCell::default(),
+        mesh_attributes_used: Default::default(),
     })
 }
 

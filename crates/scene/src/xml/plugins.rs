@@ -180,6 +180,7 @@ const PLUGINS: &[PluginEntry] = &[
     ("texture", "rawconstant", &["value"]),
     ("texture", "checkerboard", &["color0", "color1", "to_uv"]),
     ("texture", "bitmap", &["filename", "filter_type", "wrap_mode", "raw", "to_uv", "format", "accel"]),
+    ("texture", "mesh_attribute", &["name", "scale"]),
     ("medium", "homogeneous", &["sigma_t", "albedo", "scale", "sample_emitters"]),
     ("medium", "heterogeneous", &["sigma_t", "albedo", "scale", "sample_emitters"]),
     (

@@ -5,6 +5,7 @@
 use super::context::Builder;
 use super::document::Element;
 use super::params::Params;
+use super::textures::{MeshScope, ScopeMesh};
 use super::transform::uniform_scale;
 use super::{bsdfs, emitters, obj, ply, serialized, LoadError};
 use crate::bsdf::Bsdf;
@@ -78,6 +79,7 @@ fn build_placed<'a>(
     let own = p.transform_opt("to_world")?.unwrap_or(Mat4::IDENTITY);
     let to_world = placed.map_or(own, |(outer, _)| outer * own);
     let flip_normals = p.bool("flip_normals", false)?;
+    let mut attributes = Vec::new();
     let geometry = match p.ty() {
         "sphere" => sphere(&p, &to_world, flip_normals)?,
         "cube" => {
@@ -93,9 +95,25 @@ fn build_placed<'a>(
             require_planar_rank(&p, &to_world)?;
             Geometry::Disk { to_world, flip_normals }
         }
-        _ => Geometry::Mesh(mesh_file(b, &p, &to_world, flip_normals)?),
+        _ => {
+            let (mesh, attrs) = mesh_file(b, &p, &to_world, flip_normals)?;
+            attributes = attrs;
+            Geometry::Mesh(mesh)
+        }
     };
     check_extent(&p, &geometry)?;
+    // What a `mesh_attribute` texture in this shape's BSDF reads (`textures::mesh_attribute`).
+    let mesh = match &geometry {
+        Geometry::Mesh(m) => Some(ScopeMesh {
+            kind: p.ty().to_string(),
+            indices: if attributes.is_empty() { Vec::new() } else { m.indices.clone() },
+            vertex_count: m.positions.len(),
+            attributes,
+        }),
+        _ => None,
+    };
+    *b.doc.mesh_scope.borrow_mut() =
+        MeshScope::Shape { shape: format!("{} at line {}", el.describe(), el.line), mesh };
 
     let mut bsdf: Option<Bsdf> = None;
     let mut interior: Option<MediumId> = None;
@@ -146,6 +164,7 @@ fn build_placed<'a>(
             }
         }
     }
+    *b.doc.mesh_scope.borrow_mut() = MeshScope::Outside;
     p.finish()?;
 
     let shape_index = b.shapes.len() as u32;
@@ -290,7 +309,7 @@ fn mesh_file(
     p: &Params,
     to_world: &Mat4,
     flip_normals: bool,
-) -> Result<TriangleMesh, LoadError> {
+) -> Result<(TriangleMesh, Vec<crate::mesh_attribute::AttributeArray>), LoadError> {
     let filename =
         p.string_opt("filename")?.ok_or_else(|| p.element().error("missing parameter 'filename'"))?;
     let face_normals = p.bool("face_normals", false)?;
@@ -306,16 +325,16 @@ fn mesh_file(
     let linear = require_invertible(p, to_world)?;
     let path = b.doc.resolve(filename, p.element());
     let load = |path: &std::path::Path| match p.ty() {
-        "obj" => obj::load(path),
+        "obj" => obj::load(path).map(|m| (m, Vec::new())),
         "ply" => ply::load(path),
-        _ => serialized::load(path, shape_index),
+        _ => serialized::load(path, shape_index).map(|m| (m, Vec::new())),
     };
     // The mesh parsers are third-party code; some index arithmetic in them can overflow (a
     // panic in debug builds) on hostile files. A bad file must be an error, never a crash.
     let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| load(&path)))
         .unwrap_or_else(|_| Err("the file is malformed (the parser gave up)".to_string()));
-    let mut mesh = loaded
-        .and_then(|m| check_mesh(&m).map(|()| m))
+    let (mut mesh, attributes) = loaded
+        .and_then(|(m, a)| check_mesh(&m).map(|()| (m, a)))
         .map_err(|e| p.element().error(format!("cannot load mesh file '{}': {e}", path.display())))?;
 
     for v in &mut mesh.positions {
@@ -334,7 +353,7 @@ fn mesh_file(
         }
     }
     mesh.flip_normals = flip_normals;
-    Ok(mesh)
+    Ok((mesh, attributes))
 }
 
 /// A mesh the renderer can use: triangles, in-range indices, finite positions, and attribute

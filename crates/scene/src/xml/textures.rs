@@ -1,13 +1,39 @@
-//! Texture plugins `rawconstant`, `checkerboard` and `bitmap`, and reading a reflectance parameter that may be a spectrum
-//! or a `<texture>` (nested or referenced), as Mitsuba 3's `props.texture(name)` does.
+//! Texture plugins `rawconstant`, `checkerboard`, `bitmap` and `mesh_attribute`, and reading a
+//! reflectance parameter that may be a spectrum or a `<texture>` (nested or referenced), as
+//! Mitsuba 3's `props.texture(name)` does.
 
 use super::params::Params;
 use super::LoadError;
 use crate::bitmap::{Bitmap, FilterType, WrapMode};
+use crate::mesh_attribute::{AttributeArray, MeshAttribute};
 use crate::texture::{affine2_from_mat4, Texture};
 use glam::Mat4;
 use haze_core::Rgb;
 use std::sync::Arc;
+
+/// What a `mesh_attribute` texture being built reads from (`Document::mesh_scope`): it is bound
+/// to the mesh whose BSDF holds it, so the loader says which shape that is while it builds the
+/// shape's BSDF (`xml/shapes.rs`).
+#[derive(Debug, Default)]
+pub(crate) enum MeshScope {
+    /// Not inside a shape's BSDF (an emitter's or a medium's texture): an error.
+    #[default]
+    Outside,
+    /// A texture or BSDF declared at the top level, built only to check it.
+    Declaration,
+    /// The BSDF of a shape: `shape` describes it for messages (`<shape type="ply"> at line 7`).
+    Shape { shape: String, mesh: Option<ScopeMesh> },
+}
+
+/// The mesh of the shape whose BSDF is being built: its attributes and what binding needs.
+#[derive(Debug)]
+pub(crate) struct ScopeMesh {
+    /// `ply`, `obj`, ...: only PLY files carry attributes.
+    pub kind: String,
+    pub attributes: Vec<AttributeArray>,
+    pub indices: Vec<[u32; 3]>,
+    pub vertex_count: usize,
+}
 
 /// Builds a `<texture>`.
 /// - `checkerboard`: `color0` (Mitsuba 3 default 0.4), `color1` (0.2), `to_uv` (identity),
@@ -18,7 +44,12 @@ use std::sync::Arc;
 ///   storage and GPU choices of Mitsuba 3's, checked and ignored. See [`crate::bitmap`].
 /// - `rawconstant`: `value` (required), a `<float>` or a `<vector>`, returned as it is (no
 ///   spectral conversion, no clamping: Mitsuba 3 uses it for normal maps and other non-colours).
+/// - `mesh_attribute`: `name` (required, `vertex_...` or `face_...`), `scale` (1): see
+///   [`mesh_attribute`].
 pub(super) fn build(p: &Params) -> Result<Texture, LoadError> {
+    if p.ty() == "mesh_attribute" {
+        return mesh_attribute(p);
+    }
     if p.ty() == "rawconstant" {
         let value = match p.raw("value").map(|el| el.tag.as_str()) {
             None => return Err(p.element().error("a rawconstant needs 'value' (a <float> or a <vector>)")),
@@ -78,6 +109,60 @@ fn bitmap(p: &Params, to_uv: glam::Affine2) -> Result<Texture, LoadError> {
     let b = Arc::new(b);
     p.doc().bitmaps.borrow_mut().insert(p.element().uid, b.clone());
     Ok(Texture::Bitmap(b))
+}
+
+/// `mesh_attribute`: the attribute `name` of the mesh whose BSDF holds the texture, times
+/// `scale` (Mitsuba 3's `eval_attribute`). Errors name the texture: not in a shape's BSDF, a
+/// shape that is not a mesh, a name the mesh lacks (listing those it has), an attribute of other
+/// than 1 or 3 channels.
+fn mesh_attribute(p: &Params) -> Result<Texture, LoadError> {
+    let name = p.string_opt("name")?.ok_or_else(|| p.element().error("a mesh_attribute needs 'name'"))?;
+    if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+        return Err(p.error_at(
+            "name",
+            format!("a mesh attribute's name starts with \"vertex_\" or \"face_\", not '{name}'"),
+        ));
+    }
+    let scale = p.float("scale", 1.0)?;
+    if !scale.is_finite() {
+        return Err(p.error_at("scale", "'scale' must be finite"));
+    }
+    p.finish()?;
+    let scope = p.doc().mesh_scope.borrow();
+    let (shape, mesh) = match &*scope {
+        MeshScope::Declaration => return Ok(Texture::Constant(Rgb::ZERO)),
+        MeshScope::Outside => {
+            return Err(p.element().error(format!(
+                "mesh_attribute '{name}' reads the mesh whose BSDF holds it; here it is not in a shape's BSDF"
+            )))
+        }
+        MeshScope::Shape { shape, mesh } => (shape, mesh),
+    };
+    let Some(mesh) = mesh else {
+        return Err(p.element().error(format!(
+            "mesh_attribute '{name}' reads an attribute of a mesh, and {shape} is not a mesh (a ply file)"
+        )));
+    };
+    let Some(attr) = mesh.attributes.iter().find(|a| a.name == name) else {
+        let has = if mesh.kind != "ply" {
+            format!("haze reads attributes from PLY files only, and this is a '{}' mesh", mesh.kind)
+        } else if mesh.attributes.is_empty() {
+            "its file has no other vertex or face properties".to_string()
+        } else {
+            let names: Vec<&str> = mesh.attributes.iter().map(|a| a.name.as_str()).collect();
+            format!("it has {}", names.join(", "))
+        };
+        return Err(p.element().error(format!("{shape} has no mesh attribute '{name}' ({has})")));
+    };
+    let bound = MeshAttribute::bind(attr, scale, &mesh.indices, mesh.vertex_count).ok_or_else(|| {
+        p.element().error(format!(
+            "mesh attribute '{name}' of {shape} has {} channels; mesh_attribute reads 1 or 3 \
+             (Mitsuba 3 evaluates others to 0)",
+            attr.dim
+        ))
+    })?;
+    p.doc().mesh_attributes_used.set(true);
+    Ok(Texture::MeshAttribute(Arc::new(bound)))
 }
 
 /// The parameter `name` of plugin `p`: a spectrum (`<rgb>`, `<spectrum>`, `<float>`), a
