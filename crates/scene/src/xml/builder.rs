@@ -2,9 +2,9 @@
 //! sensor and integrator, and the lists of shapes, media and emitters.
 
 use super::context::Builder;
+use super::document::MeshScope;
 use super::document::{Document, Element};
 use super::params::{Ids, VALUE_TAGS};
-use super::textures::MeshScope;
 use super::{bsdfs, emitters, integrator, media, plugins, sensor, shapes, textures, LoadError};
 use crate::camera::Camera;
 use crate::scene::{IntegratorSpec, Scene};

@@ -36,7 +36,7 @@ pub(super) struct Document {
     pub bitmaps: RefCell<HashMap<usize, std::sync::Arc<crate::bitmap::Bitmap>>>,
     /// The mesh a `mesh_attribute` texture built now reads (the shape whose BSDF is being
     /// built), and whether any did (`Scene::mesh_attribute_textures`).
-    pub(crate) mesh_scope: RefCell<super::textures::MeshScope>,
+    pub(crate) mesh_scope: RefCell<MeshScope>,
     pub(crate) mesh_attributes_used: std::cell::Cell<bool>,
 }
 
@@ -510,4 +510,28 @@ mod tests {
         assert_eq!(e.line, 3);
         assert!(e.message.starts_with("malformed XML"));
     }
+}
+
+/// What a `mesh_attribute` texture being built reads from (`Document::mesh_scope`): it is bound
+/// to the mesh whose BSDF holds it, so the loader says which shape that is while it builds the
+/// shape's BSDF (`xml/shapes.rs`).
+#[derive(Debug, Default)]
+pub(crate) enum MeshScope {
+    /// Not inside a shape's BSDF (an emitter's or a medium's texture): an error.
+    #[default]
+    Outside,
+    /// A texture or BSDF declared at the top level, built only to check it.
+    Declaration,
+    /// The BSDF of a shape: `shape` describes it for messages (`<shape type="ply"> at line 7`).
+    Shape { shape: String, mesh: Option<ScopeMesh> },
+}
+
+/// The mesh of the shape whose BSDF is being built: its attributes and what binding needs.
+#[derive(Debug)]
+pub(crate) struct ScopeMesh {
+    /// `ply`, `obj`, ...: only PLY files carry attributes.
+    pub kind: String,
+    pub attributes: Vec<crate::mesh_attribute::AttributeArray>,
+    pub indices: Vec<[u32; 3]>,
+    pub vertex_count: usize,
 }

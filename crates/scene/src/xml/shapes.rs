@@ -4,8 +4,8 @@
 
 use super::context::Builder;
 use super::document::Element;
+use super::document::{MeshScope, ScopeMesh};
 use super::params::Params;
-use super::textures::{MeshScope, ScopeMesh};
 use super::transform::uniform_scale;
 use super::{bsdfs, emitters, obj, ply, serialized, LoadError};
 use crate::bsdf::Bsdf;

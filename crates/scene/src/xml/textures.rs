@@ -2,38 +2,15 @@
 //! reflectance parameter that may be a spectrum or a `<texture>` (nested or referenced), as
 //! Mitsuba 3's `props.texture(name)` does.
 
+use super::document::MeshScope;
 use super::params::Params;
 use super::LoadError;
 use crate::bitmap::{Bitmap, FilterType, WrapMode};
-use crate::mesh_attribute::{AttributeArray, MeshAttribute};
+use crate::mesh_attribute::MeshAttribute;
 use crate::texture::{affine2_from_mat4, Texture};
 use glam::Mat4;
 use haze_core::Rgb;
 use std::sync::Arc;
-
-/// What a `mesh_attribute` texture being built reads from (`Document::mesh_scope`): it is bound
-/// to the mesh whose BSDF holds it, so the loader says which shape that is while it builds the
-/// shape's BSDF (`xml/shapes.rs`).
-#[derive(Debug, Default)]
-pub(crate) enum MeshScope {
-    /// Not inside a shape's BSDF (an emitter's or a medium's texture): an error.
-    #[default]
-    Outside,
-    /// A texture or BSDF declared at the top level, built only to check it.
-    Declaration,
-    /// The BSDF of a shape: `shape` describes it for messages (`<shape type="ply"> at line 7`).
-    Shape { shape: String, mesh: Option<ScopeMesh> },
-}
-
-/// The mesh of the shape whose BSDF is being built: its attributes and what binding needs.
-#[derive(Debug)]
-pub(crate) struct ScopeMesh {
-    /// `ply`, `obj`, ...: only PLY files carry attributes.
-    pub kind: String,
-    pub attributes: Vec<AttributeArray>,
-    pub indices: Vec<[u32; 3]>,
-    pub vertex_count: usize,
-}
 
 /// Builds a `<texture>`.
 /// - `checkerboard`: `color0` (Mitsuba 3 default 0.4), `color1` (0.2), `to_uv` (identity),
