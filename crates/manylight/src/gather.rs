@@ -7,12 +7,14 @@
 //! The path-space table of docs/theory.md §2.1 says which connection makes which path; this file makes the
 //! camera half of each row: emitters hit by a gathering chain (counted fully), next-event
 //! estimation on gathering segments (`single.rs`) and at gathering points
-//! (`haze_render::integrators::surface_nee`, no MIS), and the caller's virtual-light sums.
+//! (`haze_render::integrators::surface_nee`, MIS-weighted against the continuation's BSDF
+//! sample, `Walk::mis_from`), and the caller's virtual-light sums.
 
 use crate::camera::{CameraSegment, MAX_SEGMENTS};
 use crate::vrl::Segment;
 use glam::{Vec2, Vec3};
 use haze_core::ray::offset_origin;
+use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::hero_channel;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
@@ -156,12 +158,19 @@ struct Walk {
     /// radiance leaving `y` estimated by a camera walk from `y`, estimates without the VPLs'
     /// singularity.
     compensate_from: Option<Vec3>,
-    /// The chain passed a rough interface (`Bsdf::is_rough_interface`) and no delta vertex
-    /// since: next-event estimation there counted the emitters this chain could hit.
-    after_rough: bool,
     /// The ray is the camera's (not yet queried): the scene answers it from its camera grid
     /// (`Scene::intersect_camera`, the tree's answer).
     camera_ray: bool,
+    /// The chain continues from the gathering point or rough interface `x` by a non-delta BSDF
+    /// sample of effective density `p` (`p_bsdf / k` from a gathering point, one of `k`
+    /// gathering vertices chosen; `p_bsdf` from a rough interface), and only null boundaries and
+    /// thin sheets' straight crossings lie behind: the emitters it meets are direct light at
+    /// `x`, which next-event estimation there also samples. Both weigh it by
+    /// the power heuristic (`SurfaceMis::PowerHeuristicShared`), so that neither strategy's
+    /// tail is left alone where the other samples well (an environment map whose bright part
+    /// the point does not see: NEE alone left Mitsuba 3's `test_homo_emitter_inside_medium`
+    /// backdrop 2-5x too dark at 108 spp, a heavy tail).
+    mis_from: Option<(Vec3, f32)>,
 }
 
 /// How a chain ended.
@@ -199,8 +208,8 @@ pub(crate) fn whole_path_radiance(
         skip_area_emitters: false,
         may_split: gather.split(),
         compensate_from: None,
-        after_rough: false,
         camera_ray: true,
+        mis_from: None,
     };
     CHAIN.with_borrow_mut(|chain| {
         chain.clear();
@@ -227,7 +236,6 @@ fn walk(
         let end = walk_chain(scene, &mut st, max_events, max_light_path, gather, sampler, chain, out);
         let seen_directly = std::mem::replace(&mut st.direct, false);
         st.skip_area_emitters = false;
-        st.after_rough = false;
         st.may_split = None;
         for ChainSegment { cs, after_surface, .. } in chain.iter().filter(|c| !c.gathered) {
             // Next-event estimation on the segment makes paths of `c + 1` events (crate::depth).
@@ -277,14 +285,22 @@ fn walk(
             _ => None,
         };
         st.compensate_from = None;
+        st.mis_from = None;
+        // The gathering vertices a continuation may start from: the chain's scattering segments
+        // and the point.
+        let scattering = chain.iter().filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black()).count();
+        let candidates = scattering + hit.is_some() as usize;
         let mut frame_wi = None;
         if let Some(h) = &hit {
             let shape = &scene.shapes[h.shape as usize];
             let frame = scene.shading_frame(h);
             let wi = frame.to_local(-st.ray.d);
-            // Next-event estimation here makes paths of `c + 1` events (crate::depth).
+            // Next-event estimation here makes paths of `c + 1` events (crate::depth); whenever
+            // it may, so may the continuation's BSDF sample from here (`st.events + 1 <
+            // max_events`), its MIS partner (`Walk::mis_from`), chosen with probability `1/k`.
             let nee = if st.events < max_light_path {
-                surface_nee(scene, sampler, h, &frame, wi, st.medium, SurfaceMis::None)
+                let share = SurfaceMis::PowerHeuristicShared(1.0 / candidates as f32);
+                surface_nee(scene, sampler, h, &frame, wi, st.medium, share)
             } else {
                 Rgb::ZERO
             };
@@ -295,8 +311,6 @@ fn walk(
             frame_wi = Some((frame, wi));
         }
         // Continue from one gathering vertex of the chain, chosen uniformly.
-        let scattering = chain.iter().filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black()).count();
-        let candidates = scattering + hit.is_some() as usize;
         // The continuation's vertex is an event after those before it: a segment's own count
         // (delta vertices may separate a chain's segments) or the gathering point's.
         let fewest = chain.iter().map(|c| c.cs.events).chain(hit.is_some().then_some(st.events)).min();
@@ -351,6 +365,7 @@ fn walk(
             st.beta *= bs.weight * candidates as f32;
             st.surface_seen = true;
             st.compensate_from = (!bs.specular).then_some(h.p);
+            st.mis_from = (!bs.specular).then_some((h.p, bs.pdf / candidates as f32));
             if bs.specular {
                 // A delta lobe of a gathering BSDF (smooth `plastic`'s coat): no connection
                 // evaluates it (`eval` holds the other lobes only), so the chain after it
@@ -386,7 +401,7 @@ fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample
         gathering: st.gathering || !bs.null,
         direct: st.direct && bs.null,
         compensate_from: st.compensate_from.filter(|_| bs.null),
-        after_rough: st.after_rough && bs.null,
+        mis_from: st.mis_from.filter(|_| bs.null),
         ..*st
     }
 }
@@ -457,14 +472,30 @@ fn walk_chain(
         // `hide_emitters` hides what the camera sees at no event, as volpath's `depth == 0`.
         let hidden = st.events == 0 && scene.integrator.hide_emitters;
         let Some(h) = hit else {
-            if st.gathering && !st.after_rough && !hidden {
-                out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
+            match st.mis_from {
+                None if st.gathering && !hidden => {
+                    out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
+                }
+                Some((_, p_bsdf)) => {
+                    for (le, pdf) in scene.environment_emission(st.ray.d) {
+                        out.add(emitted, st.beta * le * power_heuristic(p_bsdf, pdf));
+                    }
+                }
+                None => {}
             }
             return ChainEnd::Stop;
         };
-        if st.gathering && !st.skip_area_emitters && !st.after_rough && !hidden {
-            if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
-                out.add(emitted, st.beta * le);
+        // Emitters met after a non-delta sample's null crossings only are weighed against the
+        // next-event estimation at the sample's vertex; the others count fully while gathering
+        // (no other strategy finds them), except under `skip_area_emitters`.
+        if let Some((e, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
+            match st.mis_from {
+                None if st.gathering && !st.skip_area_emitters && !hidden => out.add(emitted, st.beta * le),
+                Some((x, p_bsdf)) => {
+                    let w = power_heuristic(p_bsdf, scene.area_emitter_pdf(e, x, h.p, h.n));
+                    out.add(emitted, st.beta * le * w);
+                }
+                None => {}
             }
         }
         let shape = &scene.shapes[h.shape as usize];
@@ -479,17 +510,18 @@ fn walk_chain(
                 return ChainEnd::Surface(h);
             }
             // A rough interface in a gathering chain (docs/theory.md §2.1, "Rough interfaces"):
-            // direct light by next-event estimation (the only strategy for it: the emitters this
-            // chain hits before its next delta vertex are left out, `after_rough`), then a BSDF
-            // sample, and the chain goes on gathering beyond. The paths a virtual light would
+            // direct light by next-event estimation, then a BSDF sample (the two weighed by MIS,
+            // `Walk::mis_from`), and the chain goes on gathering beyond. The paths a virtual light would
             // make by a connection to this point are those the gathering beyond makes.
             // The frame the BSDF is sampled and evaluated in, as volpath's: an anisotropic
             // or textured roughness follows `dp/du`, which a frame built from the normal alone
             // ignores (`Scene::shading_frame`).
             let frame = scene.shading_frame(&h);
             let wi = frame.to_local(-st.ray.d);
+            // Weighed against the BSDF sample below, taken whenever this estimate is (both need
+            // `st.events + 1 < max_events`).
             if st.events < max_light_path {
-                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, SurfaceMis::None);
+                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, SurfaceMis::PowerHeuristic);
                 out.add(Component::Surface, st.beta * nee);
             }
             if st.events + 1 >= max_events {
@@ -503,7 +535,7 @@ fn walk_chain(
             let skip_area_emitters = st.direct && gather.splats_caustics();
             *st = after_delta(st, &h, &frame, &bs, scene);
             st.skip_area_emitters = skip_area_emitters;
-            st.after_rough = true;
+            st.mis_from = Some((h.p, bs.pdf));
             st.direct = false;
             if !survives_roulette(st, sampler) {
                 return ChainEnd::Stop;
@@ -553,10 +585,11 @@ fn walk_chain(
 
 /// The rest of the path of the gathering chain `st`, whose ray starts in a path-traced medium, by
 /// volpath's walk: its throughput, event counts and component class carry over, and the emitter
-/// hits that the walk's other strategies count are left to them (`HandOff`): after a rough
-/// interface its next-event estimation's, behind a delta chain from a vertex the camera sees
-/// directly the caustic paths'. Emitter hits before volpath's first event count fully, as the
-/// gathering chain counts them. Paths partition by their first camera vertex that is not a
+/// hits that the walk's other strategies count are left to them (`HandOff`): behind a delta
+/// chain from a vertex the camera sees directly the caustic paths'. Emitter hits before
+/// volpath's first event count fully, as the gathering chain counts them, except after a rough
+/// interface: there volpath weighs them against that interface's next-event estimation, as the
+/// chain would (`Walk::mis_from`). Paths partition by their first camera vertex that is not a
 /// delta or null one: in a path-traced medium (or beyond one on the chain) volpath's, elsewhere
 /// the gather's.
 fn hand_off(scene: &Scene, st: &Walk, gather: &impl Gather, sampler: &mut Sampler, out: &mut PathRadiance) {
@@ -569,8 +602,10 @@ fn hand_off(scene: &Scene, st: &Walk, gather: &impl Gather, sampler: &mut Sample
         medium_events: st.events,
         surface_events: st.surface_seen as u32,
         first_query: st.camera_ray,
+        specular_chain: st.mis_from.is_none(),
+        last_p: st.mis_from.map_or(st.ray.o, |(x, _)| x),
+        last_pdf: st.mis_from.map_or(1.0, |(_, p)| p),
         hand_off: HandOff {
-            skip_all: st.after_rough,
             skip_area: st.skip_area_emitters,
             direct: st.direct && gather.splats_caustics(),
             pending: false,

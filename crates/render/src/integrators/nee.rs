@@ -248,11 +248,16 @@ fn crossing_factor(bsdf: &Bsdf, d: Vec3, ns: Vec3, uv: TexPoint) -> Rgb {
 }
 
 /// How [`surface_nee`] weights a light sample against BSDF sampling.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SurfaceMis {
     /// The power heuristic against the BSDF's pdf (the integrator also counts emitters its BSDF
     /// samples hit, as `volpath` does).
     PowerHeuristic,
+    /// The power heuristic against a BSDF sample that the integrator takes with probability
+    /// `share` (the many-light methods continue from one of `k` gathering vertices, `share =
+    /// 1/k`): that strategy's density is `share * p_bsdf`, and its emitter hits are weighted
+    /// with the same pair (Veach 1997, eq. 9.13, the one-sample choice folded into the pdf).
+    PowerHeuristicShared(f32),
     /// Weight 1: next-event estimation is the only strategy for direct light at this vertex
     /// (the many-light integrators, `docs/theory.md` §2.1).
     None,
@@ -287,6 +292,10 @@ pub fn surface_nee(
     // The pdf only where the MIS weight needs it, computed with `f` (shared terms).
     let (f, bsdf_pdf) = match mis {
         SurfaceMis::PowerHeuristic if !es.is_delta => shape.bsdf.eval_pdf(wi, wo, h.tex()),
+        SurfaceMis::PowerHeuristicShared(share) if !es.is_delta => {
+            let (f, pdf) = shape.bsdf.eval_pdf(wi, wo, h.tex());
+            (f, share * pdf)
+        }
         _ => (shape.bsdf.eval(wi, wo, h.tex()), 0.0),
     };
     if f.is_black() {
@@ -306,7 +315,9 @@ pub fn surface_nee(
         return Rgb::ZERO;
     }
     let w = match mis {
-        SurfaceMis::PowerHeuristic if !es.is_delta => haze_core::sampling::power_heuristic(es.pdf, bsdf_pdf),
+        SurfaceMis::PowerHeuristic | SurfaceMis::PowerHeuristicShared(_) if !es.is_delta => {
+            haze_core::sampling::power_heuristic(es.pdf, bsdf_pdf)
+        }
         _ => 1.0,
     };
     f * es.radiance * tr * (w / es.pdf)

@@ -137,9 +137,6 @@ impl PathState {
 /// strategies count, so that each path is counted once (`docs/theory.md` §2.1).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct HandOff {
-    /// Skip every emitter hit until the next non-null sample or medium event: the walk passed a
-    /// rough interface, whose next-event estimation (no MIS) counted them.
-    pub skip_all: bool,
     /// Skip area emitters until the next non-delta event: they lie behind a delta chain from a
     /// vertex the camera sees directly, light tracing's caustic paths splat them.
     pub skip_area: bool,
@@ -155,7 +152,6 @@ impl HandOff {
     /// A medium event.
     #[inline]
     fn scattered(&mut self) {
-        self.skip_all = false;
         self.skip_area = false;
         self.pending = std::mem::take(&mut self.direct);
     }
@@ -166,7 +162,6 @@ impl HandOff {
         if bs.null {
             return;
         }
-        self.skip_all = false;
         if bs.specular {
             if std::mem::take(&mut self.pending) {
                 self.skip_area = true;
@@ -320,9 +315,7 @@ impl VolPath {
             let visible = !(depth == 0 && self.hide_emitters);
 
             let Some(h) = hit.map(|h| scene.interaction(&h)) else {
-                if hand_off.skip_all {
-                    // Counted by the other estimator's next-event estimation (`HandOff`).
-                } else if visible && count_direct {
+                if visible && count_direct {
                     // Weight 1: no pdf needed (an environment map's pdf is a lookup in its
                     // sampling table, a cache miss, for every escaping camera or glass path).
                     for e in scene.emitters.iter().filter(|e| e.is_environment()) {
@@ -337,7 +330,7 @@ impl VolPath {
                 break;
             };
 
-            if visible && !hand_off.skip_all && !hand_off.skip_area {
+            if visible && !hand_off.skip_area {
                 if let Some((e, le)) = scene.area_radiance(h.shape, h.n, -ray.d) {
                     let w = if count_direct {
                         1.0
