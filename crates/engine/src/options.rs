@@ -182,10 +182,10 @@ impl Kind {
                 .ok_or_else(|| "must be a positive number".into()),
             Kind::PositiveOr(words) => match words.iter().find(|w| **w == t) {
                 Some(w) => Ok(Value::Word(w)),
-                None => number().filter(|x| *x > 0.0).map(Value::Float).ok_or_else(|| {
-                    let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
-                    format!("must be a positive number or {}", quoted.join(" or "))
-                }),
+                None => number()
+                    .filter(|x| *x > 0.0)
+                    .map(Value::Float)
+                    .ok_or_else(|| format!("must be a positive number or {}", one_of(words))),
             },
             Kind::Seconds => {
                 const MIN: f64 = 1e-3;
@@ -199,15 +199,11 @@ impl Kind {
                     Some(x) => Ok(Value::Float(x)),
                 }
             }
-            Kind::Choice(words) => words.iter().find(|w| **w == t).map(|w| Value::Word(w)).ok_or_else(|| {
-                let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
-                match quoted.split_last() {
-                    Some((last, rest)) if !rest.is_empty() => {
-                        format!("must be {} or {last}", rest.join(", "))
-                    }
-                    _ => format!("must be {}", quoted.join("")),
-                }
-            }),
+            Kind::Choice(words) => words
+                .iter()
+                .find(|w| **w == t)
+                .map(|w| Value::Word(w))
+                .ok_or_else(|| format!("must be {}", one_of(words))),
             Kind::Flag => match t.to_ascii_lowercase().as_str() {
                 "true" => Ok(Value::Flag(true)),
                 "false" => Ok(Value::Flag(false)),
@@ -260,6 +256,15 @@ pub enum Spelling {
     Flag,
     /// `max_cut` (Python keywords, `haze compare` method options).
     Keyword,
+}
+
+/// The words of a choice quoted, in an error message: `'a', 'b' or 'c'`.
+fn one_of(words: &[&str]) -> String {
+    let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
+    match quoted.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => quoted.concat(),
+    }
 }
 
 /// One option: everything every front end needs to know about it.
@@ -1190,7 +1195,11 @@ mod tests {
             o.method.compensated_clamp.for_scene(scene, o.method.clamp)
         };
         let auto = c(&[], &small).expect("on by default");
-        assert!((auto - 36.0 / (r * r)).abs() <= 1e-5 * auto, "{auto} for R {r}");
+        let divisor = haze_manylight::integrators::COMPENSATED_CLAMP_DIVISOR;
+        assert!((auto - divisor * divisor / (r * r)).abs() <= 1e-5 * auto, "{auto} for R {r}");
+        // The help text states the rule with the divisor the code uses.
+        let help = OPTIONS.iter().find(|o| o.name == "compensated_clamp").unwrap().help;
+        assert!(help.contains(&format!("({divisor}/R)^2")), "{help}");
         let scaled = c(&[], &large).unwrap();
         assert!((scaled * 1e6 / auto - 1.0).abs() < 1e-4, "{scaled} is not {auto} / 1000^2");
         assert_eq!(c(&[("compensated_clamp", "auto")], &small), Some(auto));
