@@ -382,7 +382,7 @@ impl CausticTracer {
                         w_prev: frame.to_local(-ray.d),
                         flux: beta,
                         shape: h.shape,
-                        uv: h.uv,
+                        tex: h.tex(),
                         medium,
                     };
                     if let Some(splat) = view.connect_surface(scene, &vpl) {
@@ -392,7 +392,8 @@ impl CausticTracer {
                 return;
             }
             let frame = scene.shading_frame(&h);
-            let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
+            let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.tex())
+            else {
                 return;
             };
             through_delta |= !bs.null;
