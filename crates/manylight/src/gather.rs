@@ -465,7 +465,7 @@ fn walk_chain(
             return ChainEnd::Stop;
         };
         if st.gathering && !st.skip_area_emitters && !st.after_rough && !hidden {
-            if let Some((_, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
+            if let Some((_, le)) = scene.area_radiance(h.shape, h.n, h.tex(), -st.ray.d) {
                 out.add(emitted, st.beta * le);
             }
         }
