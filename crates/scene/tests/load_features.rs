@@ -408,24 +408,27 @@ fn textured_area_radiance_and_errors() {
     ));
     assert_eq!(radiance(&load(&with(r#"<rgb name="radiance" value="2"/>"#))), Rgb::splat(2.0).into());
     assert_eq!(radiance(&load(&with(""))), Rgb::ONE.into());
-    for (body, want) in [
+    for (body, want, line) in [
         (
             r#"<texture type="checkerboard" name="radiance"><rgb name="color1" value="-1"/></texture>"#,
             "'radiance' must lie in [0,",
+            4, // the emitter's line: the texture's values are checked where it is used
         ),
-        (r#"<rgb name="radiance" value="-1"/>"#, "'radiance' must not be negative"),
+        (r#"<rgb name="radiance" value="-1"/>"#, "'radiance' must not be negative", 5),
         (
             r#"<rgb name="radiance" value="1"/><texture type="checkerboard" name="radiance"/>"#,
             "'radiance' is given more than once",
+            5,
         ),
         (
             r#"<texture type="checkerboard" name="irradiance"/>"#,
-            "<emitter type=\"area\"> does not take a nested <texture>",
+            "<emitter type=\"area\"> does not take a texture 'irradiance' (texture parameters: radiance)",
+            5,
         ),
     ] {
         let e = expect_error(load_with(&with(body), &LoadOptions::default()));
         assert!(e.message.contains(want), "{body}: {e}");
-        assert_eq!(e.line, 5, "{body}: {e}");
+        assert_eq!(e.line, line, "{body}: {e}");
     }
     // Emitters without a texture parameter keep refusing one, naming the emitter.
     for (emitter, param) in [("constant", "radiance"), ("point", "intensity"), ("directional", "irradiance")]

@@ -157,6 +157,7 @@ pub(super) fn area_radiance(p: &Params) -> Result<Texture, LoadError> {
     if let Some(m) = p.objects(&["medium"]).first() {
         return Err(m.site.error("unsupported: a medium inside <emitter> (haze emitters take no medium)"));
     }
+    super::textures::reject_other_textures(p, &["radiance"])?;
     let textured = p.objects(&["texture"]).iter().any(|o| o.name == Some("radiance"));
     let radiance = if textured {
         super::textures::texture(p, "radiance", Rgb::ONE, (0.0, super::MAX_MAGNITUDE))?
