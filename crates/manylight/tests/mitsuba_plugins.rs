@@ -62,6 +62,20 @@ fn renders(scene: &Scene) -> Vec<(&'static str, Passes)> {
     vec![("vrl", vrl), ("vpl", vpl), ("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]
 }
 
+/// Renders `scene` with every many-light method ([`renders`]) and asserts that each passes the
+/// rule (module docs) against `refs/{name}.exr`.
+fn assert_every_method_matches(scene: &Scene, name: &str) {
+    let mut failures = Vec::new();
+    for (method, passes) in renders(scene) {
+        let (r, mean_z) = against_reference(&passes, name);
+        println!("{name}, {method}: {r}; per-pass image-mean z = {mean_z:.2}");
+        if !passed(&r, mean_z) {
+            failures.push(format!("{method}: {r}; image-mean z = {mean_z:.2}"));
+        }
+    }
+    assert!(failures.is_empty(), "{name} does not match Mitsuba 3:\n{}", failures.join("\n"));
+}
+
 /// Mitsuba 3's `mesh_attribute` (per-vertex colours as a diffuse reflectance, per-face weights
 /// as a `blendbsdf` weight) looked up at the hit's triangle and barycentrics by every lookup of
 /// the many-light methods: gathering points, surface VPLs, light-path and camera-path BSDF
@@ -69,15 +83,7 @@ fn renders(scene: &Scene) -> Vec<(&'static str, Passes)> {
 #[test]
 fn mesh_attribute_matches_mitsuba() {
     let scene = load("mesh-attribute");
-    let mut failures = Vec::new();
-    for (method, passes) in renders(&scene) {
-        let (r, mean_z) = against_reference(&passes, "mesh-attribute");
-        println!("mesh-attribute, {method}: {r}; per-pass image-mean z = {mean_z:.2}");
-        if !passed(&r, mean_z) {
-            failures.push(format!("{method}: {r}; image-mean z = {mean_z:.2}"));
-        }
-    }
-    assert!(failures.is_empty(), "does not match Mitsuba 3:\n{}", failures.join("\n"));
+    assert_every_method_matches(&scene, "mesh-attribute");
 
     let mut flat = scene;
     let Bsdf::Diffuse { reflectance } = &flat.shapes[0].bsdf else { panic!("a diffuse") };
@@ -96,15 +102,7 @@ fn mesh_attribute_matches_mitsuba() {
 #[test]
 fn textured_area_emitter_matches_mitsuba() {
     let scene = load("textured-area");
-    let mut failures = Vec::new();
-    for (method, passes) in renders(&scene) {
-        let (r, mean_z) = against_reference(&passes, "textured-area");
-        println!("textured-area, {method}: {r}; per-pass image-mean z = {mean_z:.2}");
-        if !passed(&r, mean_z) {
-            failures.push(format!("{method}: {r}; image-mean z = {mean_z:.2}"));
-        }
-    }
-    assert!(failures.is_empty(), "does not match Mitsuba 3:\n{}", failures.join("\n"));
+    assert_every_method_matches(&scene, "textured-area");
 
     let mut flat = scene;
     let haze_scene::Emitter::Area { radiance, .. } = &mut flat.emitters[0] else { panic!("an area emitter") };
