@@ -107,11 +107,6 @@ impl Method {
                 scene.camera.plugin_name()
             );
         }
-        // The many-light walks look textures up by the hit's uv alone (`SurfaceInteraction::uv`);
-        // a mesh attribute also needs its triangle and barycentrics (`SurfaceInteraction::tex`).
-        if kind != MethodKind::VolPath && scene.mesh_attribute_textures {
-            bail!("integrator '{kind}' does not support mesh_attribute textures (render with volpath)");
-        }
         if kind != MethodKind::VolPath && scene.emitters.iter().any(|e| e.is_textured_spot()) {
             bail!("integrator '{kind}' does not support spot lights with a 'texture' (render with volpath)");
         }

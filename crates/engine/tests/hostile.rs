@@ -79,31 +79,3 @@ fn many_light_methods_refuse_projectors() {
     let options = resolve(MethodKind::VolPath, &[], Spelling::Flag).unwrap();
     assert!(Method::build(&scene, MethodKind::VolPath, &options.method, 1).is_ok());
 }
-
-/// A `mesh_attribute` texture renders with volpath only (the many-light walks look textures
-/// up by uv alone): the many-light methods refuse it by name; the same scene without it builds.
-#[test]
-fn many_light_methods_refuse_mesh_attributes() {
-    use haze_engine::methods::Method;
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/mitsuba-plugins/scenes");
-    let scene = |texture: &str| {
-        let xml = format!(
-            r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
-            <emitter type="point"><point name="position" x="0" y="0" z="2"/></emitter>
-            <shape type="ply"><string name="filename" value="meshes/vertex-colours.ply"/><bsdf type="diffuse">{texture}</bsdf></shape></scene>"#
-        );
-        load_str(&xml, &repo.join("t.xml"), &repo, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
-    };
-    let with = scene(
-        r#"<texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_color"/></texture>"#,
-    );
-    let without = scene(r#"<rgb name="reflectance" value="0.5"/>"#);
-    for kind in [MethodKind::Vrl, MethodKind::Vpl, MethodKind::VrlLightcuts, MethodKind::VplLightcuts] {
-        let options = resolve(kind, &[], Spelling::Flag).unwrap();
-        let e = Method::build(&with, kind, &options.method, 1).err().expect("an error").to_string();
-        assert!(e.contains("does not support mesh_attribute textures (render with volpath)"), "{e}");
-        assert!(Method::build(&without, kind, &options.method, 1).is_ok(), "{kind}: the control");
-    }
-    let options = resolve(MethodKind::VolPath, &[], Spelling::Flag).unwrap();
-    assert!(Method::build(&with, MethodKind::VolPath, &options.method, 1).is_ok());
-}

@@ -12,7 +12,7 @@
 
 use crate::camera::{CameraSegment, MAX_SEGMENTS};
 use crate::vrl::Segment;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::hero_channel;
@@ -21,6 +21,7 @@ use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_render::integrators::{surface_nee, HandOff, PathState, SurfaceMis, VolPath};
 use haze_render::{Component, PathRadiance};
 use haze_scene::bsdf::BsdfSample;
+use haze_scene::texture::TexPoint;
 use haze_scene::{Bsdf, Medium, MediumId, Scene, SurfaceInteraction};
 use std::cell::RefCell;
 
@@ -33,7 +34,8 @@ pub struct GatherPoint<'a> {
     /// Unit direction towards the camera side, local to `frame`.
     pub wi: Vec3,
     pub bsdf: &'a Bsdf,
-    pub uv: Vec2,
+    /// Where the BSDF's textures are looked up (`SurfaceInteraction::tex`).
+    pub tex: TexPoint,
     /// Scattering events of the camera path before this point (`crate::depth`).
     pub events: u32,
 }
@@ -42,7 +44,7 @@ impl GatherPoint<'_> {
     /// `f(wi, d) |cos d|` towards the unit world direction `d` (towards the light).
     #[inline]
     pub fn reflectance(&self, d: Vec3) -> Rgb {
-        self.bsdf.eval(self.wi, self.frame.to_local(d), self.uv)
+        self.bsdf.eval(self.wi, self.frame.to_local(d), self.tex)
     }
 }
 
@@ -306,7 +308,7 @@ fn walk(
             };
             let key = ((sampler.next_u32() as u64) << 32) | sampler.next_u32() as u64;
             let gp =
-                GatherPoint { p: h.p, n: h.n, frame, wi, bsdf: &shape.bsdf, uv: h.uv, events: st.events };
+                GatherPoint { p: h.p, n: h.n, frame, wi, bsdf: &shape.bsdf, tex: h.tex(), events: st.events };
             out.add(Component::Surface, st.beta * (nee + gather.point(&gp, key)));
             frame_wi = Some((frame, wi));
         }
@@ -361,7 +363,7 @@ fn walk(
             }
             let (Some(h), Some((frame, wi))) = (hit, frame_wi) else { return };
             let shape = &scene.shapes[h.shape as usize];
-            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else { return };
+            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.tex()) else { return };
             st.beta *= bs.weight * candidates as f32;
             st.surface_seen = true;
             st.compensate_from = (!bs.specular).then_some(h.p);
@@ -488,7 +490,7 @@ fn walk_chain(
         // Emitters met after a non-delta sample's null crossings only are weighed against the
         // next-event estimation at the sample's vertex; the others count fully while gathering
         // (no other strategy finds them), except under `skip_area_emitters`.
-        if let Some((e, le)) = scene.area_radiance(h.shape, h.n, -st.ray.d) {
+        if let Some((e, le)) = scene.area_radiance(h.shape, h.n, h.tex(), -st.ray.d) {
             match st.mis_from {
                 None if st.gathering && !st.skip_area_emitters && !hidden => out.add(emitted, st.beta * le),
                 Some((x, p_bsdf)) => {
@@ -528,7 +530,7 @@ fn walk_chain(
                 return ChainEnd::Stop;
             }
             let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
-            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else {
+            let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.tex()) else {
                 return ChainEnd::Stop;
             };
             // Seen directly, its light through delta chains is the caustic paths' (`splat.rs`).
@@ -555,7 +557,7 @@ fn walk_chain(
             // The two lobes of a two-lobe delta BSDF: `u1` below and above every lobe
             // probability picks each (the BSDFs choose a lobe by `u1 < p`).
             let lobes =
-                (shape.bsdf.sample(wi, 0.0, u2, h.uv), shape.bsdf.sample(wi, ONE_MINUS_EPS, u2, h.uv));
+                (shape.bsdf.sample(wi, 0.0, u2, h.tex()), shape.bsdf.sample(wi, ONE_MINUS_EPS, u2, h.tex()));
             if let (Some(a), Some(b)) = lobes {
                 if a.pdf < 1.0 && b.pdf < 1.0 && (a.transmitted != b.transmitted || a.null != b.null) {
                     let branch = |bs: &BsdfSample| {
@@ -569,7 +571,7 @@ fn walk_chain(
                 }
             }
         }
-        let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.uv) else {
+        let Some(bs) = shape.bsdf.sample(wi, u1, u2, h.tex()) else {
             return ChainEnd::Stop;
         };
         *st = after_delta(st, &h, &frame, &bs, scene);

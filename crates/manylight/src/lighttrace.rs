@@ -149,7 +149,9 @@ pub struct SurfaceVplRecord {
     /// Light arriving at the vertex, in watts: `beta / mean(r)` before the BSDF.
     pub flux: Rgb,
     pub shape: u32,
-    pub uv: glam::Vec2,
+    /// Where the BSDF's textures are looked up (`SurfaceInteraction::tex`: uv, and the
+    /// triangle and barycentrics a `mesh_attribute` reads).
+    pub tex: haze_scene::texture::TexPoint,
     /// The medium the light path arrived in (the shape decides the medium of each side).
     pub medium: Option<MediumId>,
     /// Scattering events of the light path before this vertex (`crate::depth`).
@@ -167,7 +169,7 @@ impl SurfaceVplRecord {
             w_prev: frame.to_local(self.w_prev),
             flux: self.flux,
             shape: self.shape,
-            uv: self.uv,
+            tex: self.tex,
             medium: self.medium,
             events: self.events,
         }
@@ -383,13 +385,13 @@ fn trace_one(
                 w_prev: -ray.d,
                 flux: power * t / r.mean(),
                 shape: h.shape,
-                uv: h.uv,
+                tex: h.tex(),
                 medium,
                 events,
             });
         }
         let frame = scene.shading_frame(&h);
-        let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
+        let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.tex()) else {
             return;
         };
         // Adjoint transport: undo the radiance-only 1/eta^2 factor of refraction.

@@ -277,7 +277,7 @@ impl LightPoint {
                 let s = scene.sample_area_emitter_point(i, u)?;
                 Some(LightPoint {
                     p: s.p,
-                    kind: LightKind::Area { weighted_radiance: *radiance / s.pdf, n: s.n },
+                    kind: LightKind::Area { weighted_radiance: radiance.eval(s.tex) / s.pdf, n: s.n },
                 })
             }
             // volpath only: the engine refuses many-light methods on scenes with one.

@@ -209,7 +209,7 @@ impl CausticTracer {
             Emitter::Area { shape, .. } => {
                 let table = scene.area_sampler(k)?;
                 let ss = table.sample(&scene.shapes[*shape as usize], u_pos);
-                (ss.p, Some(ss.n), ss.pdf)
+                (ss.p, Some((ss.n, ss.tex)), ss.pdf)
             }
             _ => return None,
         };
@@ -222,19 +222,19 @@ impl CausticTracer {
                     * Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, *cos_cutoff, *cos_beam, local)
             }
             Emitter::Area { shape, .. } => {
-                let nn = n?;
+                let (nn, tex) = n?;
                 let cos = nn.dot(d);
                 if cos <= 0.0 {
                     return None;
                 }
-                scene.area_radiance(*shape, nn, d).map(|(_, le)| le)? * cos
+                scene.area_radiance(*shape, nn, tex, d).map(|(_, le)| le)? * cos
             }
             _ => return None,
         };
         if le.is_black() {
             return None;
         }
-        Some(EmissionSample { p, d, n, weight: le / (p_k * p_pos * pdf_dir), emitter: k })
+        Some(EmissionSample { p, d, n: n.map(|(n, _)| n), weight: le / (p_k * p_pos * pdf_dir), emitter: k })
     }
 
     /// A line of the sun's direction `d` aimed at the targets (the parallel-light form of the
@@ -382,7 +382,7 @@ impl CausticTracer {
                         w_prev: frame.to_local(-ray.d),
                         flux: beta,
                         shape: h.shape,
-                        uv: h.uv,
+                        tex: h.tex(),
                         medium,
                     };
                     if let Some(splat) = view.connect_surface(scene, &vpl) {
@@ -392,7 +392,8 @@ impl CausticTracer {
                 return;
             }
             let frame = scene.shading_frame(&h);
-            let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.uv) else {
+            let Some(bs) = shape.bsdf.sample(frame.to_local(-ray.d), s.next_1d(), s.next_2d(), h.tex())
+            else {
                 return;
             };
             through_delta |= !bs.null;
@@ -464,7 +465,7 @@ fn emitter_weight(scene: &Scene, k: u32, e: &Emitter, targets: &[Target]) -> Opt
             let sh = &scene.shapes[*shape as usize];
             let area = scene.area_sampler(k)?.area;
             let c = bounding_sphere(&sh.geometry).map_or(Vec3::ZERO, |t| t.c);
-            Some(radiance.mean() * area * omega(c) / PI)
+            Some(radiance.mean().mean() * area * omega(c) / PI)
         }
         Emitter::Directional { irradiance, .. } => {
             Some(irradiance.mean() * targets.iter().map(|t| PI * t.r * t.r).sum::<f32>())

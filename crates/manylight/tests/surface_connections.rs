@@ -8,7 +8,6 @@
 
 mod vrl_support;
 
-use glam::Vec2;
 use haze_core::{Frame, Rgb, Sampler, Vec3};
 use haze_manylight::vpl::{point_light_to_point, sample_point_light_to_segment, SurfaceVpl};
 use haze_manylight::vrl::surface::sample_vrl_to_point;
@@ -225,7 +224,7 @@ impl SegCase {
             w_prev,
             flux: random_rgb(&mut s, 0.5, 2.0),
             shape: 0,
-            uv: Vec2::ZERO,
+            tex: Default::default(),
             medium: None,
         };
         let sigma_s = random_rgb(&mut s, 0.2, 1.2);
@@ -325,7 +324,7 @@ fn surface_vpls_to_surface_point_match_the_disk_form_factor() {
                     w_prev: Vec3::new(0.2, 0.1, 0.97).normalize(),
                     flux: phi,
                     shape: 0,
-                    uv: Vec2::ZERO,
+                    tex: Default::default(),
                     medium: None,
                 };
                 point_light_to_point(

@@ -288,7 +288,7 @@ fn area_light_emits_from_the_side_its_triangles_face() {
             IntegratorSpec::default(),
             vec![quad],
             medium.into_iter().collect(),
-            vec![Emitter::Area { shape: 0, radiance }],
+            vec![Emitter::Area { shape: 0, radiance: radiance.into() }],
         )
     };
     // 100 degrees from the geometric normal -z: facing away from a viewer on the -z side.
@@ -341,7 +341,7 @@ fn fog_cube_under_a_light(z_light: f32) -> Scene {
         IntegratorSpec::default(),
         vec![fog, light],
         vec![medium(Rgb::ONE, Rgb::splat(0.9), Phase::Isotropic)],
-        vec![Emitter::Area { shape: 1, radiance: Rgb::ONE }],
+        vec![Emitter::Area { shape: 1, radiance: Rgb::ONE.into() }],
     )
 }
 

@@ -30,8 +30,10 @@ pub enum Emitter {
         /// intensity ([`Emitter::spot_texture`]); `None` for a plain spot.
         texture: Option<Texture>,
     },
-    /// Diffuse area light on shape `shape`, emitting `radiance` on the side its normal points to.
-    Area { shape: u32, radiance: Rgb },
+    /// Diffuse area light on shape `shape`, emitting `radiance` on the side its normal points to:
+    /// a constant, or (Mitsuba 3's textured `area`) a texture looked up at the surface point's
+    /// [`TexPoint`](crate::texture::TexPoint), a hit's or a sampled point's.
+    Area { shape: u32, radiance: Texture },
     /// Uniform environment radiance from every direction at infinity.
     Constant { radiance: Rgb },
     /// Radiance at infinity from a latitude-longitude image (see [`EnvMap`]).

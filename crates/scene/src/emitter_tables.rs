@@ -101,7 +101,7 @@ impl EmitterTables {
 
 /// The mean over the RGB channels of the power an emitter sends into the scene, in watts:
 /// `4 pi I` (point), `2 pi (1 - cos cutoff) I` (spot, an upper bound: the falloff is left
-/// out), `pi A L` (area, one-sided), `pi s mean(E) A_image` (projector: [`crate::projector::Projector::power`]), and for emitters at infinity the flux through the disk of
+/// out), `pi A L` (area, one-sided; a textured radiance by its mean over uv, Mitsuba's `Texture::mean`, exact when the uv map preserves area ratios), `pi s mean(E) A_image` (projector: [`crate::projector::Projector::power`]), and for emitters at infinity the flux through the disk of
 /// the bounding sphere, `pi r^2 E` (directional) and `pi r^2 Int L dw` (constant, envmap).
 /// Only ratios matter (the light paths' emitter choice).
 pub fn emitted_power(e: &Emitter, area: Option<&AreaSampler>, sphere: BoundingSphere) -> f32 {
@@ -114,7 +114,7 @@ pub fn emitted_power(e: &Emitter, area: Option<&AreaSampler>, sphere: BoundingSp
             2.0 * PI * (1.0 - cos_cutoff) * intensity.mean() * tex
         }
         Emitter::Projector(p) => p.power(),
-        Emitter::Area { radiance, .. } => PI * area.map_or(0.0, |a| a.area) * radiance.mean(),
+        Emitter::Area { radiance, .. } => PI * area.map_or(0.0, |a| a.area) * radiance.mean().mean(),
         Emitter::Constant { radiance } => disk * 4.0 * PI * radiance.mean(),
         Emitter::EnvMap(map) => disk * map.radiance_integral().mean(),
         Emitter::Directional { irradiance, .. } => disk * irradiance.mean(),

@@ -9,6 +9,7 @@ use crate::emitter::Emitter;
 use crate::emitter_tables::BoundingSphere;
 use crate::medium::MediumId;
 use crate::scene::Scene;
+use crate::texture::TexPoint;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{sample_uniform_sphere, uniform_sphere_pdf};
 use haze_core::Rgb;
@@ -163,7 +164,7 @@ impl Scene {
                 Some(EmitterSample {
                     wi,
                     dist,
-                    radiance: *radiance,
+                    radiance: radiance.eval(s.tex),
                     pdf: sel * s.pdf * d2 / cos_l,
                     is_delta: false,
                     emitter: idx as u32,
@@ -238,12 +239,14 @@ impl Scene {
         })
     }
 
-    /// Radiance leaving an area-emitting shape at a point with normal `n` in direction `w`
-    /// (unit, pointing away from the surface). Zero on the back side.
-    pub fn area_radiance(&self, shape: u32, n: Vec3, w: Vec3) -> Option<(u32, Rgb)> {
+    /// Radiance leaving an area-emitting shape at a point with normal `n` and texture point
+    /// `at` (`SurfaceInteraction::tex` of a hit, `SurfaceSample::tex` of a sampled point) in
+    /// direction `w` (unit, pointing away from the surface), and the emitter's index. `None`
+    /// on the back side.
+    pub fn area_radiance(&self, shape: u32, n: Vec3, at: TexPoint, w: Vec3) -> Option<(u32, Rgb)> {
         let e = self.shapes[shape as usize].emitter?;
         match &self.emitters[e as usize] {
-            Emitter::Area { radiance, .. } if n.dot(w) > 0.0 => Some((e, *radiance)),
+            Emitter::Area { radiance, .. } if n.dot(w) > 0.0 => Some((e, radiance.eval(at))),
             _ => None,
         }
     }
@@ -299,7 +302,9 @@ impl Scene {
     /// `P`), a point on it and a direction. With `sel = 1 / P`: point lights emit uniformly over
     /// the sphere (`weight = 4 pi I sel`), spot lights uniformly in their cutoff cone
     /// (`weight = I falloff 2 pi (1 - cos_cutoff) sel`), area lights from a uniform point with a
-    /// cosine-weighted direction on the normal side (`weight = L pi A sel`). Emitters at
+    /// cosine-weighted direction on the normal side (`weight = L(uv) pi A sel`, a textured
+    /// radiance at the point's uv, the point uniform by area as Mitsuba 3's shape
+    /// `sample_position`). Emitters at
     /// infinity ([`Self::sample_infinite_emission`]) start on a disk outside the scene.
     pub fn sample_emission(&self, u_select: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         use haze_core::sampling::{sample_cosine_hemisphere, sample_uniform_cone, uniform_cone_pdf};
@@ -347,7 +352,7 @@ impl Scene {
                     p: s.p,
                     d,
                     n: Some(s.n),
-                    weight: *radiance * (haze_core::PI * table.area * sel),
+                    weight: radiance.eval(s.tex) * (haze_core::PI * table.area * sel),
                     emitter: idx as u32,
                 })
             }

@@ -88,9 +88,6 @@ pub struct Scene {
     pub shapes: Vec<Shape>,
     pub media: Vec<Medium>,
     pub emitters: Vec<Emitter>,
-    /// Some BSDF reads a `mesh_attribute` texture, which needs each hit's triangle and
-    /// barycentrics (`SurfaceInteraction::tex`); only volpath passes them to the BSDFs.
-    pub mesh_attribute_textures: bool,
     pub(crate) emitter_tables: EmitterTables,
     pub(crate) accel: Accel,
     /// The film grid of leaf lists that answers camera rays ([`Self::intersect_camera`]), built
@@ -220,7 +217,6 @@ impl Scene {
             clear,
             touching,
             any_transition,
-            mesh_attribute_textures: false,
             camera_boundary: OnceLock::new(),
         }
     }

@@ -151,7 +151,7 @@ fn emitters() {
     assert!((cutoff_angle - 40f32.to_radians()).abs() < 1e-6);
     assert!((beam_width - 10f32.to_radians()).abs() < 1e-6);
     assert_eq!(s.emitters[3], Emitter::Constant { radiance: Rgb::splat(0.25) });
-    assert_eq!(s.emitters[4], Emitter::Area { shape: 0, radiance: Rgb::ONE });
+    assert_eq!(s.emitters[4], Emitter::Area { shape: 0, radiance: Rgb::ONE.into() });
     assert_eq!(s.shapes[0].emitter, Some(4));
 }
 
@@ -265,7 +265,10 @@ fn spectra_as_wavelength_lists_and_filters() {
             <spectrum name="radiance" value="400:0, 500:0.3, 600:0.8, 700:1.1"/></emitter></shape>
         <emitter type="constant"><spectrum name="radiance" value="0.25"/></emitter>"#,
     );
-    let Emitter::Area { radiance, .. } = s.emitters[0] else { panic!("area emitter expected") };
+    let Emitter::Area { radiance: haze_scene::texture::Texture::Constant(radiance), .. } = s.emitters[0]
+    else {
+        panic!("area emitter expected")
+    };
     // Mitsuba 3's rgb variants give this triple for the same spectrum (peer README).
     let expected = [1.12687, 0.488194, 0.0880343];
     for (got, want) in radiance.0.iter().zip(expected) {
@@ -377,5 +380,65 @@ fn projector_parameters_and_errors() {
         let e = expect_error(load_with(&with(body), &LoadOptions::default()));
         assert!(e.message.contains(want), "{body}: {e}");
         assert_eq!(e.line, 3, "{body}: {e}");
+    }
+}
+
+/// An `area` emitter's `radiance` as a texture (nested or `<ref>`), and its errors, each naming
+/// the parameter and its line; a texture stays refused where an emitter takes none.
+#[test]
+fn textured_area_radiance_and_errors() {
+    use haze_scene::texture::Texture;
+    let with = |body: &str| {
+        format!(
+            "<sensor type=\"perspective\"/>\n<texture type=\"checkerboard\" id=\"c\"/>\n<shape type=\"rectangle\"><emitter type=\"area\">\n{body}</emitter></shape>"
+        )
+    };
+    let radiance = |s: &Scene| match &s.emitters[0] {
+        Emitter::Area { radiance, .. } => radiance.clone(),
+        e => panic!("an area emitter, not {e:?}"),
+    };
+    let s = load(&with(
+        r#"<texture type="checkerboard" name="radiance"><rgb name="color0" value="5, 4, 3"/></texture>"#,
+    ));
+    let Texture::Checkerboard { color0, .. } = radiance(&s) else { panic!("a checkerboard") };
+    assert_eq!(color0, Rgb::new(5.0, 4.0, 3.0), "emitted radiance is not limited to [0, 1]");
+    assert!(matches!(
+        radiance(&load(&with(r#"<ref name="radiance" id="c"/>"#))),
+        Texture::Checkerboard { .. }
+    ));
+    assert_eq!(radiance(&load(&with(r#"<rgb name="radiance" value="2"/>"#))), Rgb::splat(2.0).into());
+    assert_eq!(radiance(&load(&with(""))), Rgb::ONE.into());
+    for (body, want, line) in [
+        (
+            r#"<texture type="checkerboard" name="radiance"><rgb name="color1" value="-1"/></texture>"#,
+            "'radiance' must lie in [0,",
+            4, // the emitter's line: the texture's values are checked where it is used
+        ),
+        (r#"<rgb name="radiance" value="-1"/>"#, "'radiance' must not be negative", 5),
+        (
+            r#"<rgb name="radiance" value="1"/><texture type="checkerboard" name="radiance"/>"#,
+            "'radiance' is given more than once",
+            5,
+        ),
+        (
+            r#"<texture type="checkerboard" name="irradiance"/>"#,
+            "<emitter type=\"area\"> does not take a texture 'irradiance' (texture parameters: radiance)",
+            5,
+        ),
+    ] {
+        let e = expect_error(load_with(&with(body), &LoadOptions::default()));
+        assert!(e.message.contains(want), "{body}: {e}");
+        assert_eq!(e.line, line, "{body}: {e}");
+    }
+    // Emitters without a texture parameter keep refusing one, naming the emitter.
+    for (emitter, param) in [("constant", "radiance"), ("point", "intensity"), ("directional", "irradiance")]
+    {
+        let xml = format!(
+            "<sensor type=\"perspective\"/>\n<emitter type=\"{emitter}\">\n<texture type=\"checkerboard\" name=\"{param}\"/></emitter>"
+        );
+        let e = expect_error(load_with(&xml, &LoadOptions::default()));
+        let want = format!("<emitter type=\"{emitter}\"> does not take a nested <texture>");
+        assert!(e.message.contains(&want), "{emitter}: {e}");
+        assert_eq!(e.line, 4, "{emitter}: {e}");
     }
 }

@@ -119,7 +119,7 @@ fn top_level_objects_with_ids_are_referenced() {
     assert_eq!(s.emitters.len(), 2, "each shape that refers to the area emitter emits");
     for (i, e) in s.emitters.iter().enumerate() {
         assert!(
-            matches!(e, haze_scene::Emitter::Area { shape, radiance } if *shape == i as u32 && *radiance == haze_core::Rgb::new(3.0, 2.0, 1.0)),
+            matches!(e, haze_scene::Emitter::Area { shape, radiance } if *shape == i as u32 && *radiance == haze_core::Rgb::new(3.0, 2.0, 1.0).into()),
             "{e:?}"
         );
     }

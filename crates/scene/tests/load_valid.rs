@@ -64,7 +64,7 @@ fn foggy_room() {
     assert_eq!(s.shapes[0].interior, Some(0));
     let light = &s.shapes[1];
     assert_eq!((light.exterior, light.emitter), (Some(0), Some(0)));
-    assert_eq!(s.emitters, vec![Emitter::Area { shape: 1, radiance: Rgb::splat(40.0) }]);
+    assert_eq!(s.emitters, vec![Emitter::Area { shape: 1, radiance: Rgb::splat(40.0).into() }]);
     // The light faces down (rotated +90 deg about x), just below the ceiling.
     let Geometry::Mesh(m) = &light.geometry else { panic!("rectangle is a mesh") };
     assert!(close(m.face_normal(0), Vec3::NEG_Y));

@@ -8,8 +8,8 @@
 
 use crate::vrl::estimator::connection_direction;
 use crate::vrl::{Segment, VrlMedium};
-use glam::Vec2;
 use haze_core::{Frame, Rgb, Vec3};
+use haze_scene::texture::TexPoint;
 use haze_scene::{Bsdf, MediumId};
 
 /// A surface VPL: one non-delta surface vertex of a light path.
@@ -25,7 +25,8 @@ pub struct SurfaceVpl {
     /// Light arriving at `p` (`beta / mean(r)`), in watts.
     pub flux: Rgb,
     pub shape: u32,
-    pub uv: Vec2,
+    /// Where the BSDF's textures are looked up (`SurfaceInteraction::tex`).
+    pub tex: TexPoint,
     /// The medium the light path arrived in.
     pub medium: Option<MediumId>,
     /// Scattering events of the light path before this vertex (the path-length rule,
@@ -44,7 +45,7 @@ impl SurfaceVpl {
             return Rgb::ZERO;
         }
         let wl = self.frame.to_local(w);
-        self.flux * bsdf.eval(wl, self.w_prev, self.uv) * (wl.z.abs() / cos_prev)
+        self.flux * bsdf.eval(wl, self.w_prev, self.tex) * (wl.z.abs() / cos_prev)
     }
 }
 

@@ -419,7 +419,7 @@ mod tests {
     }
 
     fn scene_with_media(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>) -> Scene {
-        scene_with(shapes, media, vec![Emitter::Area { shape: 1, radiance: Rgb::ONE }])
+        scene_with(shapes, media, vec![Emitter::Area { shape: 1, radiance: Rgb::ONE.into() }])
     }
 
     /// A one-pixel camera at the origin, in vacuum.
@@ -524,7 +524,7 @@ mod tests {
     fn a_medium_is_unlit_only_when_every_emitter_is_at_infinity() {
         let shapes = vec![quad("floor", -5.0, 5.0, 0.0, true), quad("light", 1.5, 3.0, 0.05, false)];
         let sky = Emitter::Constant { radiance: Rgb::ONE };
-        let area = Emitter::Area { shape: 1, radiance: Rgb::ONE };
+        let area = Emitter::Area { shape: 1, radiance: Rgb::ONE.into() };
         let unlit = |sigma_t: Rgb, emitters: Vec<Emitter>, medium: Option<u32>| {
             scene_with(shapes.clone(), fog(sigma_t), emitters).medium_unlit(medium)
         };
@@ -609,7 +609,7 @@ mod tests {
         assert_eq!(check(vec![box_with_fog_inside()], vec![outside.clone(), inside]), (false, false));
         // An area light anywhere (here a quad far outside).
         let lamp = quad("lamp", 10.0, 11.0, 10.0, false);
-        let area = Emitter::Area { shape: 1, radiance: Rgb::ONE };
+        let area = Emitter::Area { shape: 1, radiance: Rgb::ONE.into() };
         assert_eq!(check(vec![box_with_fog_inside(), lamp], vec![outside.clone(), area]), (false, false));
         // A surface that lets shadow rays through, and an open box.
         let mut null = box_with_fog_inside();

@@ -331,7 +331,7 @@ impl VolPath {
             };
 
             if visible && !hand_off.skip_area {
-                if let Some((e, le)) = scene.area_radiance(h.shape, h.n, -ray.d) {
+                if let Some((e, le)) = scene.area_radiance(h.shape, h.n, h.tex(), -ray.d) {
                     let w = if count_direct {
                         1.0
                     } else {

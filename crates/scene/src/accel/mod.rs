@@ -46,7 +46,7 @@ pub use watertight::{PacketHits, TriPacket, TriSoa, WatertightRay};
 use wide::{Avx2, NodeTest, WideBvh, WideTree, LEAF, LEAF_SIZE, WIDTH};
 
 use crate::interaction::SurfaceInteraction;
-use crate::shape::analytic::{intersect_disk, intersect_sphere};
+use crate::shape::analytic::{disk_uv, intersect_disk, intersect_sphere, sphere_uv};
 use crate::shape::{Geometry, Shape};
 use glam::{Mat4, Vec2, Vec3, Vec3A};
 use haze_core::Ray;
@@ -246,11 +246,7 @@ fn analytic_hit(a: &Analytic, ray: &Ray) -> Option<PreliminaryHit> {
             let p = ray.at(t);
             let n = (p - *center).normalize();
             let n = if *flip { -n } else { n };
-            let phi = n.z.atan2(n.x);
-            let uv = Vec2::new(
-                phi * 0.5 * haze_core::INV_PI + 0.5,
-                n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI,
-            );
+            let uv = sphere_uv(n);
             Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
                 t,
                 p,
@@ -264,7 +260,7 @@ fn analytic_hit(a: &Analytic, ray: &Ray) -> Option<PreliminaryHit> {
         }
         Analytic::Disk { shape, to_world, inv, normal } => {
             let (t, local) = intersect_disk(ray, to_world, inv)?;
-            let uv = Vec2::new(local.length(), local.y.atan2(local.x) * 0.5 * haze_core::INV_PI + 0.5);
+            let uv = disk_uv(local);
             Some(PreliminaryHit(Hit::Done(SurfaceInteraction {
                 t,
                 p: ray.at(t),

@@ -35,6 +35,20 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32) -> Option<f32> {
     None
 }
 
+/// haze's `uv` of the sphere point with unit normal `n` (as flipped by `flip_normals`):
+/// `u = atan2(n_z, n_x) / 2pi + 1/2`, `v = acos(n_y) / pi` (not Mitsuba's sphere mapping).
+#[inline]
+pub fn sphere_uv(n: Vec3) -> Vec2 {
+    let phi = n.z.atan2(n.x);
+    Vec2::new(phi * 0.5 * haze_core::INV_PI + 0.5, n.y.clamp(-1.0, 1.0).acos() * haze_core::INV_PI)
+}
+
+/// haze's `uv` of the point `local` of the unit disk: `u = r`, `v = atan2(y, x) / 2pi + 1/2`.
+#[inline]
+pub fn disk_uv(local: Vec2) -> Vec2 {
+    Vec2::new(local.length(), local.y.atan2(local.x) * 0.5 * haze_core::INV_PI + 0.5)
+}
+
 /// Intersection with the disk `to_world(unit disk in z = 0)`; returns `t` and the local
 /// position (for `uv`).
 pub fn intersect_disk(ray: &Ray, to_world: &Mat4, inv: &Mat4) -> Option<(f32, Vec2)> {

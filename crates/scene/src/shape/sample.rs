@@ -1,6 +1,8 @@
 //! Uniform sampling of points on shapes by area (for area lights).
 
+use super::analytic::{disk_uv, sphere_uv};
 use super::{Geometry, Shape};
+use crate::mesh_attribute::TexPoint;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{sample_uniform_disk_concentric, sample_uniform_sphere, sample_uniform_triangle};
 
@@ -11,6 +13,9 @@ pub struct SurfaceSample {
     /// Geometric normal on the exterior side (flipped with `flip_normals`).
     pub n: Vec3,
     pub pdf: f32,
+    /// Where textures are looked up at the point, as at a ray's hit there
+    /// (`SurfaceInteraction::tex`): a textured area emitter's radiance.
+    pub tex: TexPoint,
 }
 
 /// Area-sampling table for one shape: total area and, for meshes, the CDF over triangles.
@@ -57,12 +62,21 @@ impl AreaSampler {
                 let b = sample_uniform_triangle(Vec2::new(ux, u.y));
                 let [p0, p1, p2] = m.vertices(i);
                 let p = p0 * (1.0 - b.x - b.y) + p1 * b.x + p2 * b.y;
-                SurfaceSample { p, n: m.face_normal(i), pdf }
+                // A mesh without uvs has the barycentrics as uvs, as at a hit (and in Mitsuba 3).
+                let uv = match &m.uvs {
+                    Some(uvs) => {
+                        let [i0, i1, i2] = m.indices[i].map(|k| k as usize);
+                        uvs[i0] * (1.0 - b.x - b.y) + uvs[i1] * b.x + uvs[i2] * b.y
+                    }
+                    None => b,
+                };
+                let tex = TexPoint { uv, prim: i as u32, bary: b };
+                SurfaceSample { p, n: m.face_normal(i), pdf, tex }
             }
             Geometry::Sphere { center, radius, flip_normals } => {
                 let d = sample_uniform_sphere(u);
                 let n = if *flip_normals { -d } else { d };
-                SurfaceSample { p: *center + d * *radius, n, pdf }
+                SurfaceSample { p: *center + d * *radius, n, pdf, tex: sphere_uv(n).into() }
             }
             Geometry::Disk { to_world, flip_normals } => {
                 let q = sample_uniform_disk_concentric(u);
@@ -70,7 +84,7 @@ impl AreaSampler {
                 let ex = to_world.transform_vector3(Vec3::X);
                 let ey = to_world.transform_vector3(Vec3::Y);
                 let n = ex.cross(ey).normalize();
-                SurfaceSample { p, n: if *flip_normals { -n } else { n }, pdf }
+                SurfaceSample { p, n: if *flip_normals { -n } else { n }, pdf, tex: disk_uv(q).into() }
             }
         }
     }

@@ -107,7 +107,6 @@ pub(super) fn build(doc: &Document, file: &Path) -> Result<Scene, LoadError> {
     let mut scene =
         Scene::new(Some(file.to_path_buf()), camera, spp, integrator, b.shapes, b.media, b.emitters);
     scene.sampler = sampler;
-    scene.mesh_attribute_textures = doc.mesh_attributes_used.get();
     Ok(scene)
 }
 

@@ -35,9 +35,8 @@ pub(super) struct Document {
     /// is read once and shared.
     pub bitmaps: RefCell<HashMap<usize, std::sync::Arc<crate::bitmap::Bitmap>>>,
     /// The mesh a `mesh_attribute` texture built now reads (the shape whose BSDF is being
-    /// built), and whether any did (`Scene::mesh_attribute_textures`).
+    /// built).
     pub(crate) mesh_scope: RefCell<MeshScope>,
-    pub(crate) mesh_attributes_used: std::cell::Cell<bool>,
 }
 
 impl Document {
@@ -154,7 +153,6 @@ pub(super) fn parse(
         files: RefCell::new(ctx.files),
         bitmaps: RefCell::default(),
         mesh_scope: RefCell::default(),
-        mesh_attributes_used: Default::default(),
     })
 }
 

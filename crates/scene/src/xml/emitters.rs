@@ -6,6 +6,7 @@ use super::params::Params;
 use super::LoadError;
 use crate::emitter::Emitter;
 use crate::envmap::EnvMap;
+use crate::texture::Texture;
 use glam::{Mat4, Vec3};
 use haze_core::Rgb;
 use std::sync::Arc;
@@ -149,12 +150,20 @@ pub(super) fn build(p: &Params, doc: &Document) -> Result<Emitter, LoadError> {
     Ok(emitter)
 }
 
-/// The `radiance` of an `area` emitter (Mitsuba 3 default 1).
-pub(super) fn area_radiance(p: &Params) -> Result<Rgb, LoadError> {
+/// The `radiance` of an `area` emitter (Mitsuba 3 default 1): a spectrum, or a texture
+/// (nested or `<ref>`) looked up at the surface point's uv, every value in
+/// `[0, MAX_MAGNITUDE]`.
+pub(super) fn area_radiance(p: &Params) -> Result<Texture, LoadError> {
     if let Some(m) = p.objects(&["medium"]).first() {
         return Err(m.site.error("unsupported: a medium inside <emitter> (haze emitters take no medium)"));
     }
-    let radiance = non_negative(p, "radiance")?;
+    super::textures::reject_other_textures(p, &["radiance"])?;
+    let textured = p.objects(&["texture"]).iter().any(|o| o.name == Some("radiance"));
+    let radiance = if textured {
+        super::textures::texture(p, "radiance", Rgb::ONE, (0.0, super::MAX_MAGNITUDE))?
+    } else {
+        Texture::Constant(non_negative(p, "radiance")?)
+    };
     p.finish()?;
     Ok(radiance)
 }

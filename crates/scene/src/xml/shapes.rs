@@ -118,7 +118,7 @@ fn build_placed<'a>(
     let mut bsdf: Option<Bsdf> = None;
     let mut interior: Option<MediumId> = None;
     let mut exterior: Option<MediumId> = None;
-    let mut radiance: Option<Rgb> = None;
+    let mut radiance: Option<crate::texture::Texture> = None;
     for o in p.objects(&["bsdf", "medium", "emitter"]) {
         let twice = |what: &str| o.site.error(format!("{} takes one {what}", el.describe()));
         match o.target.tag.as_str() {

@@ -138,7 +138,6 @@ fn mesh_attribute(p: &Params) -> Result<Texture, LoadError> {
             attr.dim
         ))
     })?;
-    p.doc().mesh_attributes_used.set(true);
     Ok(Texture::MeshAttribute(Arc::new(bound)))
 }
 
