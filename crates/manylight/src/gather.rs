@@ -14,11 +14,10 @@ use crate::camera::{CameraSegment, MAX_SEGMENTS};
 use crate::vrl::Segment;
 use glam::Vec3;
 use haze_core::ray::offset_origin;
-use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::hero_channel;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
-use haze_render::integrators::{surface_nee, HandOff, PathState, SurfaceMis, VolPath};
+use haze_render::integrators::{area_hit_weight, environment_hits, surface_nee, HandOff, PathState, VolPath};
 use haze_render::{Component, PathRadiance};
 use haze_scene::bsdf::BsdfSample;
 use haze_scene::texture::TexPoint;
@@ -167,9 +166,9 @@ struct Walk {
     /// sample of effective density `p` (`p_bsdf / k` from a gathering point, one of `k`
     /// gathering vertices chosen; `p_bsdf` from a rough interface), and only null boundaries and
     /// thin sheets' straight crossings lie behind: the emitters it meets are direct light at
-    /// `x`, which next-event estimation there also samples. Both weigh it by
-    /// the power heuristic (`SurfaceMis::PowerHeuristicShared`), so that neither strategy's
-    /// tail is left alone where the other samples well (an environment map whose bright part
+    /// `x`, which next-event estimation there also samples. Both weigh it by the power
+    /// heuristic (`surface_nee`'s `bsdf_share`), so that neither strategy's tail is left alone
+    /// where the other samples well (an environment map whose bright part
     /// the point does not see: NEE alone left Mitsuba 3's `test_homo_emitter_inside_medium`
     /// backdrop 2-5x too dark at 108 spp, a heavy tail).
     mis_from: Option<(Vec3, f32)>,
@@ -301,8 +300,7 @@ fn walk(
             // it may, so may the continuation's BSDF sample from here (`st.events + 1 <
             // max_events`), its MIS partner (`Walk::mis_from`), chosen with probability `1/k`.
             let nee = if st.events < max_light_path {
-                let share = SurfaceMis::PowerHeuristicShared(1.0 / candidates as f32);
-                surface_nee(scene, sampler, h, &frame, wi, st.medium, share)
+                surface_nee(scene, sampler, h, &frame, wi, st.medium, 1.0 / candidates as f32)
             } else {
                 Rgb::ZERO
             };
@@ -479,8 +477,8 @@ fn walk_chain(
                     out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
                 }
                 Some((_, p_bsdf)) => {
-                    for (le, pdf) in scene.environment_emission(st.ray.d) {
-                        out.add(emitted, st.beta * le * power_heuristic(p_bsdf, pdf));
+                    for (le, w) in environment_hits(scene, st.ray.d, p_bsdf) {
+                        out.add(emitted, st.beta * le * w);
                     }
                 }
                 None => {}
@@ -494,7 +492,7 @@ fn walk_chain(
             match st.mis_from {
                 None if st.gathering && !st.skip_area_emitters && !hidden => out.add(emitted, st.beta * le),
                 Some((x, p_bsdf)) => {
-                    let w = power_heuristic(p_bsdf, scene.area_emitter_pdf(e, x, h.p, h.n));
+                    let w = area_hit_weight(scene, e, x, p_bsdf, &h);
                     out.add(emitted, st.beta * le * w);
                 }
                 None => {}
@@ -523,7 +521,7 @@ fn walk_chain(
             // Weighed against the BSDF sample below, taken whenever this estimate is (both need
             // `st.events + 1 < max_events`).
             if st.events < max_light_path {
-                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, SurfaceMis::PowerHeuristic);
+                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, 1.0);
                 out.add(Component::Surface, st.beta * nee);
             }
             if st.events + 1 >= max_events {

@@ -3,7 +3,7 @@
 mod nee;
 mod volpath;
 
-pub use nee::{surface_nee, transmittance_to, transmittance_to_sampled, SurfaceMis};
+pub use nee::{area_hit_weight, environment_hits, surface_nee, transmittance_to, transmittance_to_sampled};
 pub use volpath::{HandOff, PathState, VolPath};
 
 use crate::components::PathRadiance;

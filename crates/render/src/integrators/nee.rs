@@ -6,7 +6,7 @@ use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::accel::{Leaving, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use haze_scene::texture::TexPoint;
-use haze_scene::{Boundary, Bsdf, MediumId, Scene};
+use haze_scene::{Boundary, Bsdf, MediumId, Scene, SurfaceInteraction};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
 /// occluder: `t_max = |y - o| (1 - SHADOW_EPSILON)`. haze has used `1e-4` since the first
@@ -247,34 +247,24 @@ fn crossing_factor(bsdf: &Bsdf, d: Vec3, ns: Vec3, uv: TexPoint) -> Rgb {
     }
 }
 
-/// How [`surface_nee`] weights a light sample against BSDF sampling.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SurfaceMis {
-    /// The power heuristic against the BSDF's pdf (the integrator also counts emitters its BSDF
-    /// samples hit, as `volpath` does).
-    PowerHeuristic,
-    /// The power heuristic against a BSDF sample that the integrator takes with probability
-    /// `share` (the many-light methods continue from one of `k` gathering vertices, `share =
-    /// 1/k`): that strategy's density is `share * p_bsdf`, and its emitter hits are weighted
-    /// with the same pair (Veach 1997, eq. 9.13, the one-sample choice folded into the pdf).
-    PowerHeuristicShared(f32),
-    /// Weight 1: next-event estimation is the only strategy for direct light at this vertex
-    /// (the many-light integrators, `docs/theory.md` §2.1).
-    None,
-}
-
 /// Next-event estimation of direct light at the non-delta surface vertex `h` reached from the
 /// direction `wi` (local to `frame`, the shading frame at `h`) in `medium` (the medium the path
 /// arrived in): one emitter sample, `f(wi, wo) |cos wo| L_e Tr / p` with its MIS weight
 /// (`volpath`'s surface NEE). The caller multiplies by its path throughput.
+///
+/// The weight is the power heuristic against the BSDF sample from `h` that the caller takes
+/// with probability `bsdf_share` and whose emitter hits it weighs with the same pair: that
+/// strategy's density is `bsdf_share * p_bsdf` (Veach 1997, eq. 9.13, the one-sample choice
+/// folded into the pdf). `volpath` always takes it (1); the many-light methods continue from
+/// one of `k` gathering vertices (`1/k`).
 pub fn surface_nee(
     scene: &Scene,
     sampler: &mut haze_core::Sampler,
-    h: &haze_scene::SurfaceInteraction,
+    h: &SurfaceInteraction,
     frame: &Frame,
     wi: Vec3,
     medium: Option<MediumId>,
-    mis: SurfaceMis,
+    bsdf_share: f32,
 ) -> Rgb {
     let shape = &scene.shapes[h.shape as usize];
     // Directions in which `f` is zero are refused before an environment map reads their pdf
@@ -290,13 +280,11 @@ pub fn surface_nee(
     }
     let wo = frame.to_local(es.wi);
     // The pdf only where the MIS weight needs it, computed with `f` (shared terms).
-    let (f, bsdf_pdf) = match mis {
-        SurfaceMis::PowerHeuristic if !es.is_delta => shape.bsdf.eval_pdf(wi, wo, h.tex()),
-        SurfaceMis::PowerHeuristicShared(share) if !es.is_delta => {
-            let (f, pdf) = shape.bsdf.eval_pdf(wi, wo, h.tex());
-            (f, share * pdf)
-        }
-        _ => (shape.bsdf.eval(wi, wo, h.tex()), 0.0),
+    let (f, bsdf_pdf) = if es.is_delta {
+        (shape.bsdf.eval(wi, wo, h.tex()), 0.0)
+    } else {
+        let (f, pdf) = shape.bsdf.eval_pdf(wi, wo, h.tex());
+        (f, bsdf_share * pdf)
     };
     if f.is_black() {
         return Rgb::ZERO;
@@ -314,17 +302,29 @@ pub fn surface_nee(
     if tr.is_black() {
         return Rgb::ZERO;
     }
-    let w = match mis {
-        SurfaceMis::PowerHeuristic | SurfaceMis::PowerHeuristicShared(_) if !es.is_delta => {
-            haze_core::sampling::power_heuristic(es.pdf, bsdf_pdf)
-        }
-        _ => 1.0,
-    };
+    let w = if es.is_delta { 1.0 } else { haze_core::sampling::power_heuristic(es.pdf, bsdf_pdf) };
     f * es.radiance * tr * (w / es.pdf)
 }
 
 /// `exp(-tau)` per channel, with a single `exp` when the channels are equal (grey media).
 #[inline]
+/// The environment radiance a BSDF-sampled direction `d` escapes into, each environment emitter
+/// with its MIS weight against next-event estimation: `(L_e, w)` with `w` the power heuristic of
+/// the BSDF sample's density `p_bsdf` against that emitter's NEE pdf in `d` (Veach 1997, eq.
+/// 9.13). The partner of [`surface_nee`] for the paths that continue by a BSDF sample.
+pub fn environment_hits(scene: &Scene, d: Vec3, p_bsdf: f32) -> impl Iterator<Item = (Rgb, f32)> + '_ {
+    scene
+        .environment_emission(d)
+        .map(move |(le, pdf)| (le, haze_core::sampling::power_heuristic(p_bsdf, pdf)))
+}
+
+/// The MIS weight of area emitter `emitter` hit at `h` by a BSDF sample of density `p_bsdf` taken
+/// at `from`: the power heuristic against next-event estimation's pdf of sampling that point from
+/// `from` (Veach 1997, eq. 9.13; the partner of [`surface_nee`]).
+pub fn area_hit_weight(scene: &Scene, emitter: u32, from: Vec3, p_bsdf: f32, h: &SurfaceInteraction) -> f32 {
+    haze_core::sampling::power_heuristic(p_bsdf, scene.area_emitter_pdf(emitter, from, h.p, h.n))
+}
+
 fn exp_neg(tau: Rgb) -> Rgb {
     let [r, g, b] = tau.0;
     if r == 0.0 && g == 0.0 && b == 0.0 {

@@ -22,7 +22,7 @@
 //! `volpath`'s single hero channel. Both are unbiased; MIS has far lower variance when channels
 //! differ. Every contribution is divided by `mean(r)`, the pdf ratios of the path so far.
 
-use super::nee::{surface_nee, transmittance_to_sampled, SurfaceMis};
+use super::nee::{area_hit_weight, environment_hits, surface_nee, transmittance_to_sampled};
 use super::Integrator;
 use crate::components::{Component, PathRadiance};
 use glam::Vec3;
@@ -323,8 +323,8 @@ impl VolPath {
                     }
                 } else if visible {
                     // Each environment emitter is weighted against its own NEE pdf.
-                    for (le, pdf) in scene.environment_emission(ray.d) {
-                        out.add(class, beta * le * (power_heuristic(last_pdf, pdf) / r.mean()));
+                    for (le, w) in environment_hits(scene, ray.d, last_pdf) {
+                        out.add(class, beta * le * (w / r.mean()));
                     }
                 }
                 break;
@@ -332,11 +332,7 @@ impl VolPath {
 
             if visible && !hand_off.skip_area {
                 if let Some((e, le)) = scene.area_radiance(h.shape, h.n, h.tex(), -ray.d) {
-                    let w = if count_direct {
-                        1.0
-                    } else {
-                        power_heuristic(last_pdf, scene.area_emitter_pdf(e, last_p, h.p, h.n))
-                    };
+                    let w = if count_direct { 1.0 } else { area_hit_weight(scene, e, last_p, last_pdf, &h) };
                     out.add(class, beta * le * (w / r.mean()));
                 }
             }
@@ -364,7 +360,7 @@ impl VolPath {
             let medium_towards = |d: glam::Vec3| scene.medium_towards(&h, d, medium);
 
             if !shape.bsdf.is_specular() && depth + 1 < max_depth {
-                let direct = surface_nee(scene, sampler, &h, &frame, wi, medium, SurfaceMis::PowerHeuristic);
+                let direct = surface_nee(scene, sampler, &h, &frame, wi, medium, 1.0);
                 out.add(Component::Surface, beta * direct / r.mean());
             }
 
