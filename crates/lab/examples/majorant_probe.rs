@@ -8,14 +8,14 @@
 use haze_core::{Rgb, Sampler};
 use haze_render::progressive::{render_volpath, RenderSettings};
 use haze_scene::hetero::{Heterogeneous, MajorantGrid};
-use haze_scene::{load_file, LoadOptions, Scene};
+use haze_scene::{load_file, LoadOptions, MediumKind, Scene};
 use std::sync::Arc;
 
 fn use_global_majorant(s: &mut Scene) {
     for m in &mut s.media {
-        if let Some(h) = &m.hetero {
+        if let MediumKind::Grid(h) = &mut m.kind {
             let majorants = MajorantGrid::build(&h.sigma_t, h.scale, [1; 3]);
-            m.hetero = Some(Arc::new(Heterogeneous { majorants, ..(**h).clone() }));
+            *h = Arc::new(Heterogeneous { majorants, ..(**h).clone() });
         }
     }
 }
@@ -60,7 +60,7 @@ fn main() {
         use_global_majorant(&mut global);
         let name = std::path::Path::new(path).file_stem().unwrap().to_string_lossy().to_string();
         for (label, scene) in [("grid", &grid), ("global", &global)] {
-            let Some(h) = scene.media.iter().find_map(|m| m.hetero.clone()) else { continue };
+            let Some(h) = scene.media.iter().find_map(|m| m.as_grid().cloned()) else { continue };
             let r = h.majorants.res;
             let label = format!("{label} {}x{}x{}", r[0], r[1], r[2]);
             let (maj, tau) = lookups_per_ray(&h);

@@ -21,7 +21,7 @@ use haze_render::integrators::{area_hit_weight, environment_hits, surface_nee, H
 use haze_render::{Component, PathRadiance};
 use haze_scene::bsdf::BsdfSample;
 use haze_scene::texture::TexPoint;
-use haze_scene::{Bsdf, Medium, MediumId, Scene, SurfaceInteraction};
+use haze_scene::{Bsdf, Medium, MediumId, MediumKind, Scene, SurfaceInteraction};
 use std::cell::RefCell;
 
 /// A gathering surface point: where a camera chain met a non-delta surface.
@@ -98,8 +98,8 @@ impl PathTracedMedia {
     pub fn covers(self, medium: &Medium) -> bool {
         match self {
             PathTracedMedia::None => false,
-            PathTracedMedia::Heterogeneous => medium.hetero.is_some(),
-            PathTracedMedia::All => medium.hetero.is_some() || !medium.sigma_s().is_black(),
+            PathTracedMedia::Heterogeneous => medium.as_grid().is_some(),
+            PathTracedMedia::All => medium.as_grid().is_some() || medium.scatters(),
         }
     }
 }
@@ -289,7 +289,7 @@ fn walk(
         st.mis_from = None;
         // The gathering vertices a continuation may start from: the chain's scattering segments
         // and the point.
-        let scattering = chain.iter().filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black()).count();
+        let scattering = chain.iter().filter(|c| scene.medium(c.cs.medium).scatters()).count();
         let candidates = scattering + hit.is_some() as usize;
         let mut frame_wi = None;
         if let Some(h) = &hit {
@@ -321,11 +321,7 @@ fn walk(
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
         let mut delta_lobe = false;
         if k < scattering {
-            let c = *chain
-                .iter()
-                .filter(|c| !scene.medium(c.cs.medium).sigma_s().is_black())
-                .nth(k)
-                .expect("k < count");
+            let c = *chain.iter().filter(|c| scene.medium(c.cs.medium).scatters()).nth(k).expect("k < count");
             st.events = c.cs.events + 1;
             if st.events >= max_events {
                 return;
@@ -335,15 +331,15 @@ fn walk(
             let cs = c.cs;
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
-            st.beta = match med.hetero.as_deref() {
-                None => {
+            st.beta = match &med.kind {
+                MediumKind::Homogeneous(m) => {
                     cs.tr_before
-                        * transmittance(med.sigma_t, u)
-                        * med.sigma_s()
+                        * transmittance(m.sigma_t, u)
+                        * m.sigma_s()
                         * (cs.seg.len * candidates as f32 * c.scale)
                 }
                 // `T(0, u) sigma_s(x)` estimated (T31).
-                Some(h) => {
+                MediumKind::Grid(h) => {
                     cs.tr_before
                         * crate::hetero::along(h, &cs.seg, cs.seg.at(u), sampler)
                         * (cs.seg.len * candidates as f32 * c.scale)
@@ -447,14 +443,14 @@ fn walk_chain(
                 gathered: false,
                 scale: 1.0,
             };
-            match scene.medium(m).hetero.as_deref() {
-                None => {
+            match &scene.medium(m).kind {
+                MediumKind::Homogeneous(c) => {
                     if st.gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
                         chain.push(segment(Segment::new(st.ray.o, st.ray.d, len)));
                     }
-                    st.beta *= transmittance(scene.medium(m).sigma_t, len);
+                    st.beta *= transmittance(c.sigma_t, len);
                 }
-                Some(h) => {
+                MediumKind::Grid(h) => {
                     // The gathering segment is the part where the majorant is positive (the
                     // medium is empty elsewhere, T27, T28, so the throughput there is `beta`); the walk
                     // goes on with a ratio-tracking estimate of the interval's transmittance

@@ -61,7 +61,7 @@ pub(crate) fn view<'a>(
     m: &VrlMedium,
     id: MediumId,
 ) -> (VrlMedium, Option<&'a Heterogeneous>) {
-    match scene.medium(id).hetero.as_deref() {
+    match scene.medium(id).as_grid() {
         None => (*m, None),
         Some(h) => (VrlMedium { sigma_s: Rgb::ONE, sigma_t: Rgb::ZERO, phase: m.phase }, Some(h)),
     }
@@ -105,9 +105,10 @@ const GEOMETRIC_SHARE: f64 = 0.5;
 /// `T_c <= 1` and the VRL's `Phi(0)` still bound them.
 pub(crate) fn bound_factor(scene: &Scene, m: &VrlMedium, id: MediumId) -> Rgb {
     let medium = scene.medium(id);
-    match medium.hetero {
-        None => m.sigma_s * m.phase.max_value(),
-        Some(_) => medium.sigma_t * medium.albedo * medium.phase.max_value() * (1.0 / GEOMETRIC_SHARE as f32),
+    if medium.is_homogeneous() {
+        m.sigma_s * m.phase.max_value()
+    } else {
+        medium.majorant() * medium.albedo_bound() * medium.phase.max_value() * (1.0 / GEOMETRIC_SHARE as f32)
     }
 }
 

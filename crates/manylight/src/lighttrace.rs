@@ -20,8 +20,8 @@
 //! `beta sigma_s / mean(r)` after that vertex (`sigma_s` of the vertex included).
 //!
 //! ## Heterogeneous media (`docs/theory.md` §12.5, (T31))
-//! In a heterogeneous medium the free flight is sampled by delta tracking
-//! (`haze_scene::hetero::Heterogeneous::sample_free_flight`, the same weights as `volpath`), and
+//! In a heterogeneous medium the free flight is sampled by delta tracking (`volpath`'s routine,
+//! `haze_scene::Medium::end_flight`), and
 //! a VPL sits at every real collision with flux `beta sigma_s(x) / mean(r)` (`sigma_s(x)` is in
 //! the flight's weight). The VRL is not the sampled piece: it is the whole segment up to the
 //! next surface, clipped to the majorant cells with a positive bound (the medium is empty
@@ -37,11 +37,11 @@
 use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::streams::{LIGHT_PILOT, LIGHT_STREAM};
-use haze_core::transmittance::{hero_channel, sample_free_flight, FreeFlight};
+use haze_core::transmittance::hero_channel;
 use haze_core::{Ray, Rgb, Sampler};
-use haze_scene::hetero::Flight;
 use haze_scene::lights::{EmissionError, EmissionSample};
-use haze_scene::{MediumId, Scene};
+use haze_scene::Flight;
+use haze_scene::{MediumId, MediumKind, Scene};
 use rayon::prelude::*;
 
 /// One medium segment of a light path.
@@ -298,74 +298,72 @@ fn trace_one(
     let max_len = scene_extent(scene) * 4.0;
 
     for _ in 0..haze_core::walk::MAX_LIGHT_PATH_VERTICES {
-        let hit = scene.intersect(&ray);
+        // A homogeneous medium draws its flight's distance first (the same random number as
+        // always), and the surface query stops there: a flight that ends sooner needs no surface
+        // (volpath's order).
+        let flight = medium.map(|m| scene.medium(m).begin_flight(hero, s));
+        let query = match flight {
+            Some(start) => Ray { t_max: start.query_limit(ray.t_max), ..ray },
+            None => ray,
+        };
+        let hit = scene.intersect(&query);
         let t_surface = hit.map_or(f32::INFINITY, |h| h.t);
-        if let Some(m) = medium {
+        if let (Some(m), Some(start)) = (medium, flight) {
             let med = scene.medium(m);
-            if let Some(h) = &med.hetero {
+            let flight = med.end_flight(start, ray.o, ray.d, t_surface, hero, s);
+            match &med.kind {
                 // Heterogeneous (module docs): one VRL over the whole segment where the medium
-                // is (`clip`), carrying `T(0, v)` along itself, then delta tracking for the next
+                // is (`clip`), carrying `T(0, v)` along itself; delta tracking gave the next
                 // vertex.
-                if let Some((a, b)) = h.clip(ray.o, ray.d, 0.0, t_surface.min(max_len)) {
-                    out.vrls.push(VrlRecord {
-                        o: ray.at(a),
-                        d: ray.d,
-                        len: b - a,
-                        beta: power * t / r.mean(),
-                        ratio: Rgb::ZERO,
-                        medium: m,
-                        after_surface,
-                        events,
-                    });
-                }
-                match h.sample_free_flight(ray.o, ray.d, t_surface, hero, s) {
-                    Flight::Scatter { t: dist, weight, ratio } => {
-                        // `weight` holds `sigma_s(x)` over the hero's pdf (T29).
-                        t *= weight;
-                        r *= ratio;
-                        let at = Vertex { m, after_surface, power, phase: &med.phase };
-                        if !scatter(&at, ray.at(dist), &mut ray, &mut t, r, &mut events, s, settings, out) {
-                            return;
-                        }
-                        continue;
-                    }
-                    Flight::Pass { weight, ratio } => {
-                        t *= weight;
-                        r *= ratio;
+                MediumKind::Grid(h) => {
+                    if let Some((a, b)) = h.clip(ray.o, ray.d, 0.0, t_surface.min(max_len)) {
+                        out.vrls.push(VrlRecord {
+                            o: ray.at(a),
+                            d: ray.d,
+                            len: b - a,
+                            beta: power * t / r.mean(),
+                            ratio: Rgb::ZERO,
+                            medium: m,
+                            after_surface,
+                            events,
+                        });
                     }
                 }
-            } else {
-                let ff = sample_free_flight(med.sigma_t, t_surface, hero, s.next_1d());
-                let len = match ff {
-                    FreeFlight::Interaction { t, .. } => t,
-                    FreeFlight::Pass { .. } => t_surface,
-                };
-                if len > 0.0 {
-                    out.vrls.push(VrlRecord {
-                        o: ray.o,
-                        d: ray.d,
-                        len: len.min(max_len),
-                        beta: power * t,
-                        ratio: r,
-                        medium: m,
-                        after_surface,
-                        events,
-                    });
+                // Homogeneous: the VRL up to the next vertex, its flux `Phi(v)` closed form.
+                MediumKind::Homogeneous(_) => {
+                    let len = match flight {
+                        Flight::Scatter { t, .. } => t,
+                        Flight::Pass { .. } => t_surface,
+                    };
+                    if len > 0.0 {
+                        out.vrls.push(VrlRecord {
+                            o: ray.o,
+                            d: ray.d,
+                            len: len.min(max_len),
+                            beta: power * t,
+                            ratio: r,
+                            medium: m,
+                            after_surface,
+                            events,
+                        });
+                    }
                 }
-                match ff {
-                    FreeFlight::Interaction { t: dist, weight, ratio } => {
-                        t *= weight * med.sigma_s();
-                        r *= ratio;
-                        let at = Vertex { m, after_surface, power, phase: &med.phase };
-                        if !scatter(&at, ray.at(dist), &mut ray, &mut t, r, &mut events, s, settings, out) {
-                            return;
-                        }
-                        continue;
+            }
+            match flight {
+                Flight::Scatter { t: dist, weight, sigma_s, ratio } => {
+                    // A grid's `weight` holds `sigma_s(x)` over the hero's pdf (T29), its
+                    // `sigma_s` is one.
+                    t *= weight * sigma_s;
+                    r *= ratio;
+                    let at = Vertex { m, after_surface, power, phase: &med.phase };
+                    if !scatter(&at, ray.at(dist), &mut ray, &mut t, r, &mut events, s, settings, out) {
+                        return;
                     }
-                    FreeFlight::Pass { weight, ratio } => {
-                        t *= weight;
-                        r *= ratio;
-                    }
+                    continue;
+                }
+                Flight::Pass { weight, ratio } => {
+                    t *= weight;
+                    r *= ratio;
                 }
             }
         }

@@ -37,7 +37,7 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
     if med.sigma_s.is_black() || cs.seg.len <= 0.0 {
         return Rgb::ZERO;
     }
-    let hetero = scene.medium(cs.medium).hetero.as_deref();
+    let hetero = scene.medium(cs.medium).as_grid();
     let mut total = Rgb::ZERO;
     for i in 0..scene.emitters.len() {
         let u_light = sampler.next_2d();
@@ -131,7 +131,7 @@ fn from_infinity(
     sampler: &mut Sampler,
 ) -> Rgb {
     let med = estimator_medium(scene, cs.medium);
-    let hetero = scene.medium(cs.medium).hetero.as_deref();
+    let hetero = scene.medium(cs.medium).as_grid();
     let len = cs.seg.len;
     // The collision density: `(sample, pdf)` closures over the truncated exponential or the
     // marched density (T34), or none (a thin segment: uniform alone).

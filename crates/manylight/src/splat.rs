@@ -67,7 +67,7 @@ use haze_render::integrators::transmittance_to;
 use haze_scene::camera::PixelFilter;
 use haze_scene::lights::EmissionSample;
 use haze_scene::shape::Geometry;
-use haze_scene::{Emitter, MediumId, Scene};
+use haze_scene::{Emitter, MediumId, MediumKind, Scene};
 use rayon::prelude::*;
 
 /// One pass's light-tracing splats: per pixel (row-major, as the film), the light the pass's
@@ -358,9 +358,9 @@ impl CausticTracer {
                     }
                 }
                 // A heterogeneous medium's beam by ratio tracking (docs/theory.md §12.4, §12.5).
-                match med.hetero.as_deref() {
-                    None => beta *= transmittance(med.sigma_t, len),
-                    Some(h) => beta *= h.transmittance(ray.o, ray.d, 0.0, len, s),
+                match &med.kind {
+                    MediumKind::Homogeneous(c) => beta *= transmittance(c.sigma_t, len),
+                    MediumKind::Grid(h) => beta *= h.transmittance(ray.o, ray.d, 0.0, len, s),
                 }
             }
             let Some(h) = hit else { return };
@@ -613,8 +613,7 @@ impl View {
         s: &mut Sampler,
     ) -> Option<(f32, f32, Rgb)> {
         let med = scene.medium(m);
-        let sigma_s = med.sigma_s();
-        if sigma_s.is_black() {
+        if !med.scatters() {
             return None;
         }
         let seg = crate::vrl::Segment::new(o, d, len);
@@ -634,9 +633,13 @@ impl View {
         }
         // `T(v) sigma_s`: exact in a homogeneous medium; in a heterogeneous one `sigma_s(x)` and a
         // ratio-tracking estimate of `T(v)` (docs/theory.md §12.5, (T31)).
-        let c = match med.hetero.as_deref() {
-            None => beta * transmittance(med.sigma_t, v) * sigma_s * tr * (f * theta_over_h * pr.density),
-            Some(h) => beta * crate::hetero::along(h, &seg, x, s) * tr * (f * theta_over_h * pr.density),
+        let c = match &med.kind {
+            MediumKind::Homogeneous(c) => {
+                beta * transmittance(c.sigma_t, v) * c.sigma_s() * tr * (f * theta_over_h * pr.density)
+            }
+            MediumKind::Grid(h) => {
+                beta * crate::hetero::along(h, &seg, x, s) * tr * (f * theta_over_h * pr.density)
+            }
         };
         Some((pr.px, pr.py, c))
     }

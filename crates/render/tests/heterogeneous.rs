@@ -9,7 +9,7 @@ use haze_render::progressive::RenderOutput;
 use haze_render::{render_volpath, RenderSettings};
 use haze_scene::hetero::Heterogeneous;
 use haze_scene::volume::Grid;
-use haze_scene::{load_str, LoadOptions, Scene};
+use haze_scene::{load_str, LoadOptions, MediumKind, Scene};
 use haze_testkit::ztest::z_test;
 use std::path::Path;
 use std::sync::Arc;
@@ -63,12 +63,12 @@ fn heterogeneous(dir: &Path, density_factor: f32, majorant_factor: Rgb) -> Scene
         dir,
     );
     for m in &mut s.media {
-        let h = m.hetero.clone().expect("heterogeneous");
+        let h = m.as_grid().cloned().expect("heterogeneous");
         let mut majorants = h.majorants.clone();
         for c in &mut majorants.cells {
             *c *= majorant_factor;
         }
-        m.hetero = Some(Arc::new(Heterogeneous { majorants, ..(*h).clone() }));
+        m.kind = MediumKind::Grid(Arc::new(Heterogeneous { majorants, ..h }));
     }
     s
 }

@@ -51,7 +51,10 @@ fn check(name: &str, spp: u32) {
 fn check_detects_sigma_t_scaled(name: &str, spp: u32) {
     let mut scene = load(name);
     for m in &mut scene.media {
-        m.sigma_t *= 1.1;
+        let haze_scene::MediumKind::Homogeneous(h) = &mut m.kind else {
+            panic!("{name}: a homogeneous medium")
+        };
+        h.sigma_t *= 1.1;
     }
     let r = compare(&scene, name, spp, 1);
     println!("{name} with sigma_t x 1.1: {r}");

@@ -8,6 +8,7 @@
 //! of the `sigma_t` volume: outside it there is no extinction at all, even where the volume's
 //! wrap mode would give a value.
 
+use crate::medium::Flight;
 use crate::volume::{Volume, VolumeData};
 use glam::Vec3;
 use haze_core::{Rgb, Sampler};
@@ -203,17 +204,6 @@ impl Iterator for MajorantIter<'_> {
     }
 }
 
-/// Outcome of delta tracking along a segment, in the path-level spectral MIS form of
-/// `haze_core::transmittance` (`docs/theory.md` §12.3).
-#[derive(Clone, Copy, Debug)]
-pub enum Flight {
-    /// A real collision at `t`: multiply the throughput by `weight` (it includes `sigma_s(x)`)
-    /// and the pdf ratios by `ratio`.
-    Scatter { t: f32, weight: Rgb, ratio: Rgb },
-    /// No real collision before `t_max`.
-    Pass { weight: Rgb, ratio: Rgb },
-}
-
 impl Heterogeneous {
     /// `sigma_t(x) = scale * sigma_t_volume(x)`.
     #[inline]
@@ -307,6 +297,7 @@ impl Heterogeneous {
                         return Flight::Scatter {
                             t,
                             weight: acc * t_maj * sigma_s / pdf,
+                            sigma_s: Rgb::ONE,
                             ratio: acc * t_maj * sigma_t / pdf,
                         };
                     }

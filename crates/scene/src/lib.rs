@@ -33,7 +33,7 @@ pub use camera::Camera;
 pub use emitter::Emitter;
 pub use envmap::EnvMap;
 pub use interaction::SurfaceInteraction;
-pub use medium::{Medium, MediumId};
+pub use medium::{Flight, FlightStart, Homogeneous, Medium, MediumId, MediumKind};
 pub use scene::{depth_limit, IntegratorSpec, Scene, MAX_PATH_DEPTH};
 pub use shape::{Geometry, Shape, TriangleMesh};
 pub use texture::Texture;

@@ -35,14 +35,14 @@ pub fn media_sphere(
     let mut all = empty();
     for (m, medium) in media.iter().enumerate() {
         let m = m as MediumId;
-        if medium.sigma_s().is_black() {
+        if !medium.scatters() {
             continue;
         }
         let inside = shapes.iter().filter(|s| s.interior == Some(m));
         let by_shapes = (shapes.iter().all(|s| s.exterior != Some(m))
             && (camera != Some(m) || shapes.iter().any(|s| s.interior == Some(m))))
         .then(|| inside.map(shape_bounds).fold(empty(), union));
-        let by_grid = medium.hetero.as_deref().map(|h| h.sigma_t.bbox);
+        let by_grid = medium.as_grid().map(|h| h.sigma_t.bbox);
         let bounds = match (by_shapes, by_grid) {
             (Some(a), Some(b)) => intersection(a, b),
             (Some(a), None) => a,

@@ -258,8 +258,7 @@ impl Scene {
     pub fn infinity_unreachable_from(&self, medium: Option<MediumId>) -> bool {
         self.every_surface_blocks
             && medium.is_some_and(|m| {
-                let med = self.medium(m);
-                med.is_homogeneous() && med.sigma_t.min_component() > 0.0
+                self.medium(m).as_homogeneous().is_some_and(|h| h.sigma_t.min_component() > 0.0)
             })
     }
 

@@ -5,8 +5,9 @@
 
 use glam::{Affine3A, Vec3};
 use haze_core::{Rgb, Sampler};
-use haze_scene::hetero::{Flight, Heterogeneous, MajorantGrid, MAJORANT_RES};
+use haze_scene::hetero::{Heterogeneous, MajorantGrid, MAJORANT_RES};
 use haze_scene::volume::{Filter, Grid, Volume, VolumeData, Wrap};
+use haze_scene::Flight;
 use haze_testkit::chi2::chi2_interval;
 use std::sync::Arc;
 

@@ -57,7 +57,7 @@ fn references_may_point_forward_and_share_one_medium() {
     ));
     assert_eq!(s.media.len(), 1);
     assert_eq!(s.media[0].name, "fog");
-    assert_eq!(s.media[0].albedo, Rgb::splat(0.75));
+    assert_eq!(s.media[0].as_homogeneous().unwrap().albedo, Rgb::splat(0.75));
     assert_eq!(s.media[0].phase, Phase::Isotropic);
     assert_eq!((s.shapes[0].interior, s.shapes[1].exterior), (Some(0), Some(0)));
     assert_eq!(s.shapes[0].bsdf, Bsdf::Dielectric { eta: 1.333 });
@@ -81,9 +81,9 @@ fn nested_media_scale_and_float_spectra() {
     );
     assert_eq!(s.media.len(), 2);
     assert_eq!(s.camera.medium, Some(0));
-    assert_eq!(s.media[0].sigma_t, Rgb::splat(0.5));
-    assert_eq!(s.media[1].sigma_t, Rgb::new(2.0, 4.0, 6.0));
-    assert_eq!(s.media[1].albedo, Rgb::splat(0.5));
+    assert_eq!(s.media[0].as_homogeneous().unwrap().sigma_t, Rgb::splat(0.5));
+    assert_eq!(s.media[1].as_homogeneous().unwrap().sigma_t, Rgb::new(2.0, 4.0, 6.0));
+    assert_eq!(s.media[1].as_homogeneous().unwrap().albedo, Rgb::splat(0.5));
     assert_eq!(s.media[1].phase, Phase::HenyeyGreenstein { g: 0.8 });
     assert_eq!(s.shapes[0].interior, Some(1));
 }

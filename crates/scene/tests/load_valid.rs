@@ -28,8 +28,9 @@ fn hg_box() {
     assert_eq!(s.media.len(), 1);
     let m = &s.media[0];
     assert_eq!(m.name, "haze");
-    assert_eq!(m.sigma_t, Rgb::splat(2.0));
-    assert_eq!(m.albedo, Rgb::new(0.9, 0.8, 0.7));
+    let h = m.as_homogeneous().expect("a homogeneous medium");
+    assert_eq!(h.sigma_t, Rgb::splat(2.0));
+    assert_eq!(h.albedo, Rgb::new(0.9, 0.8, 0.7));
     assert_eq!(m.phase, Phase::HenyeyGreenstein { g: 0.5 });
 
     assert_eq!(s.shapes.len(), 2);
@@ -54,8 +55,8 @@ fn hg_box() {
 fn foggy_room() {
     let s = load("foggy-room");
     assert_eq!(s.media.len(), 1);
-    assert_eq!(s.media[0].sigma_t, Rgb::splat(0.8));
-    assert_eq!(s.media[0].albedo, Rgb::splat(0.95));
+    assert_eq!(s.media[0].as_homogeneous().unwrap().sigma_t, Rgb::splat(0.8));
+    assert_eq!(s.media[0].as_homogeneous().unwrap().albedo, Rgb::splat(0.95));
     assert_eq!(s.media[0].phase, Phase::Isotropic);
     assert_eq!(s.camera.medium, Some(0));
     assert_eq!(s.camera.fov_x_deg, 60.0);

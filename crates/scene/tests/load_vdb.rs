@@ -10,14 +10,13 @@ use haze_scene::hetero::Heterogeneous;
 use haze_scene::volume::VolumeData;
 use haze_scene::{load_file, load_str, LoadOptions, Scene};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 fn data(name: &str) -> PathBuf {
     haze_testkit::data::repo_root().join("tests/data/vdb").join(name)
 }
 
-fn medium(scene: &Scene) -> Arc<Heterogeneous> {
-    scene.media[0].hetero.clone().expect("a heterogeneous medium")
+fn medium(scene: &Scene) -> Heterogeneous {
+    scene.media[0].as_grid().cloned().expect("a heterogeneous medium")
 }
 
 /// `smoke-vdb.xml` with its grid file replaced by `file` (a name in `tests/data/vdb`).

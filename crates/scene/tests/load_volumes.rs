@@ -77,7 +77,7 @@ fn grid_medium_loads_with_mitsuba_semantics() {
     )
     .unwrap();
     let m = &scene.media[0];
-    let h = m.hetero.as_ref().expect("heterogeneous");
+    let h = m.as_grid().expect("heterogeneous");
     // to_world: scale 2 then translate x by -1: the unit cube -> [-1, 1] x [0, 2] x [0, 2].
     assert_eq!(h.sigma_t.bbox, (Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 2.0)));
     // Nearest: world x = -1 + 2 (i + 0.5) / 4 is in cell i; times scale 2.
@@ -88,9 +88,9 @@ fn grid_medium_loads_with_mitsuba_semantics() {
     // Repeat: one grid width further along x is the same cell.
     assert_eq!(h.sigma_t(Vec3::new(1.0 + 2.0 * 1.5 / 4.0, 1.0, 1.0)), Rgb::splat(2.0));
     assert_eq!(h.albedo.eval(Vec3::splat(0.5)), Rgb::new(0.2, 0.5, 0.8));
-    // The homogeneous stand-ins are bounds: the global majorant and the albedo's maximum.
-    assert!(m.sigma_t[0] >= 6.0 && m.sigma_t[0] < 6.001, "{}", m.sigma_t);
-    assert_eq!(m.albedo, Rgb::new(0.2, 0.5, 0.8));
+    // Its bounds: the global majorant and the albedo's maximum.
+    assert!(m.majorant()[0] >= 6.0 && m.majorant()[0] < 6.001, "{}", m.majorant());
+    assert_eq!(m.albedo_bound(), Rgb::new(0.2, 0.5, 0.8));
     assert_eq!(m.phase, haze_core::Phase::HenyeyGreenstein { g: 0.5 });
     std::fs::remove_dir_all(&d).ok();
 }
@@ -106,7 +106,7 @@ fn grid_bbox_constvolume_and_plain_values() {
     )
     .unwrap();
     // The file's box, (-1, 0, 2) - (1, 4, 3).
-    let h = scene.media[0].hetero.clone().unwrap();
+    let h = scene.media[0].as_grid().cloned().unwrap();
     assert_eq!(h.sigma_t.bbox, (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 4.0, 3.0)));
     // A constvolume's to_world only moves its box; a plain RGB is a constant over the unit cube.
     let scene = load(
@@ -116,7 +116,7 @@ fn grid_bbox_constvolume_and_plain_values() {
          <rgb name=\"albedo\" value=\"0, 0.5, 1\"/>",
     )
     .unwrap();
-    let h = scene.media[0].hetero.clone().unwrap();
+    let h = scene.media[0].as_grid().cloned().unwrap();
     assert_eq!(h.sigma_t.bbox, (Vec3::splat(-0.5), Vec3::splat(0.5)));
     assert_eq!(h.sigma_t(Vec3::splat(7.0)), Rgb::new(0.5, 0.4, 0.3));
     assert_eq!(h.albedo.bbox, (Vec3::ZERO, Vec3::ONE));
@@ -128,7 +128,7 @@ fn grid_bbox_constvolume_and_plain_values() {
     let (_, files) = haze_scene::load_file_with_sources(&path, &LoadOptions::default()).unwrap();
     assert!(files.iter().any(|f| f.ends_with("grid.vol")), "{files:?}");
     let scene = load(&d, "<float name=\"sigma_t\" value=\"3\"/>").unwrap();
-    let h = scene.media[0].hetero.clone().unwrap();
+    let h = scene.media[0].as_grid().cloned().unwrap();
     assert_eq!(h.sigma_t.bbox, (Vec3::ZERO, Vec3::ONE));
     assert_eq!(h.albedo.eval(Vec3::ZERO), Rgb::splat(0.75));
     std::fs::remove_dir_all(&d).ok();

@@ -6,7 +6,7 @@ use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::accel::{Leaving, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use haze_scene::texture::TexPoint;
-use haze_scene::{Boundary, Bsdf, MediumId, Scene, SurfaceInteraction};
+use haze_scene::{Boundary, Bsdf, MediumId, MediumKind, Scene, SurfaceInteraction};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
 /// occluder: `t_max = |y - o| (1 - SHADOW_EPSILON)`. haze has used `1e-4` since the first
@@ -163,9 +163,9 @@ fn transmittance_impl(
         let h = &hits[i];
         if let Some(m) = medium {
             let med = scene.medium(m);
-            match &med.hetero {
-                None => tau += med.sigma_t * (h.t - last),
-                Some(het) => tr *= hetero_segment(het, &ray, last, h.t, &mut sampler),
+            match &med.kind {
+                MediumKind::Homogeneous(c) => tau += c.sigma_t * (h.t - last),
+                MediumKind::Grid(het) => tr *= hetero_segment(het, &ray, last, h.t, &mut sampler),
             }
         }
         last = h.t;
@@ -204,13 +204,10 @@ fn transmittance_impl(
     }
     if let Some(m) = medium {
         let med = scene.medium(m);
-        let sigma_t = med.sigma_t;
-        if let Some(het) = &med.hetero {
-            tr *= hetero_segment(het, &ray, last, ray.t_max, &mut sampler);
-        } else if ray.t_max.is_finite() {
-            tau += sigma_t * (ray.t_max - last);
-        } else {
-            tr *= transmittance(sigma_t, f32::INFINITY);
+        match &med.kind {
+            MediumKind::Grid(het) => tr *= hetero_segment(het, &ray, last, ray.t_max, &mut sampler),
+            MediumKind::Homogeneous(c) if ray.t_max.is_finite() => tau += c.sigma_t * (ray.t_max - last),
+            MediumKind::Homogeneous(c) => tr *= transmittance(c.sigma_t, f32::INFINITY),
         }
     }
     tr * exp_neg(tau)
@@ -354,9 +351,9 @@ fn transmittance_segments(
         let seg = hit.map_or(ray.t_max, |h| h.t);
         if let Some(m) = medium {
             let med = scene.medium(m);
-            tr *= match &med.hetero {
-                None => beer_lambert(med.sigma_t, seg),
-                Some(het) => hetero_segment(het, &ray, 0.0, seg, &mut sampler),
+            tr *= match &med.kind {
+                MediumKind::Homogeneous(c) => beer_lambert(c.sigma_t, seg),
+                MediumKind::Grid(het) => hetero_segment(het, &ray, 0.0, seg, &mut sampler),
             };
             if tr.is_black() {
                 return Rgb::ZERO;

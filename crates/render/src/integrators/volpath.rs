@@ -28,11 +28,11 @@ use crate::components::{Component, PathRadiance};
 use glam::Vec3;
 use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
-use haze_core::transmittance::{free_flight_at, free_flight_distance, hero_channel, FreeFlight};
+use haze_core::transmittance::hero_channel;
 use haze_core::{Ray, Rgb, Sampler};
 use haze_scene::accel::Leaving;
 use haze_scene::bsdf::BsdfSample;
-use haze_scene::hetero::Flight;
+use haze_scene::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
 
 #[derive(Clone, Debug)]
@@ -211,15 +211,10 @@ impl VolPath {
             // the ray is cut there and the traversal prunes every box beyond it. The hit found is
             // the closest one whenever the path reaches it; otherwise the flight ends at its
             // sampled distance, whose weight does not depend on the surface.
-            let homogeneous_flight = match medium {
-                Some(mid) if scene.medium(mid).hetero.is_none() => {
-                    Some(free_flight_distance(scene.medium(mid).sigma_t, hero, sampler.next_1d()))
-                }
-                _ => None,
-            };
-            let query = match homogeneous_flight {
-                Some(t) if t < ray.t_max => Ray { t_max: t, ..ray },
-                _ => ray,
+            let flight = medium.map(|mid| scene.medium(mid).begin_flight(hero, sampler));
+            let query = match flight {
+                Some(start) => Ray { t_max: start.query_limit(ray.t_max), ..ray },
+                None => ray,
             };
             // Whether the path scatters in a homogeneous medium or reaches a surface, the
             // sampler's next numbers are those of its next-event estimation (in a heterogeneous
@@ -241,26 +236,12 @@ impl VolPath {
             };
             let t_surface = hit.map_or(ray.t_max, |h| h.t());
 
-            if let Some(mid) = medium {
+            if let (Some(mid), Some(start)) = (medium, flight) {
                 let med = scene.medium(mid);
-                // Homogeneous: `sigma_s` multiplies after the depth check, as it always did (the
-                // same rounding); heterogeneous: the flight's weight already holds `sigma_s(x)`.
-                let (flight, sigma_s) = match (&med.hetero, homogeneous_flight) {
-                    (None, Some(t)) => (
-                        match free_flight_at(med.sigma_t, t_surface, hero, t) {
-                            FreeFlight::Interaction { t, weight, ratio } => {
-                                Flight::Scatter { t, weight, ratio }
-                            }
-                            FreeFlight::Pass { weight, ratio } => Flight::Pass { weight, ratio },
-                        },
-                        med.sigma_s(),
-                    ),
-                    // Delta tracking against the majorant grid (`docs/theory.md` §12.3).
-                    (Some(h), _) => (h.sample_free_flight(ray.o, ray.d, t_surface, hero, sampler), Rgb::ONE),
-                    (None, None) => unreachable!("a homogeneous medium's flight is drawn above"),
-                };
-                match flight {
-                    Flight::Scatter { t, weight, ratio } => {
+                match med.end_flight(start, ray.o, ray.d, t_surface, hero, sampler) {
+                    // `sigma_s` multiplies after the depth check, as it always did (the same
+                    // rounding; a grid medium's `weight` already holds `sigma_s(x)`).
+                    Flight::Scatter { t, weight, sigma_s, ratio } => {
                         let p = ray.at(t);
                         hand_off.scattered();
                         beta *= weight;

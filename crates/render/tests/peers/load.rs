@@ -136,6 +136,6 @@ fn peer_teapot_scene() {
     assert_eq!(s.integrator.name, "volpathmis");
     assert_eq!(s.emitters, vec![Emitter::Constant { radiance: Rgb::ONE }]);
     assert_eq!(s.shapes[0].interior, Some(0));
-    assert_eq!(s.media[0].albedo, Rgb::new(0.99, 0.4, 0.4));
+    assert_eq!(s.media[0].as_homogeneous().unwrap().albedo, Rgb::new(0.99, 0.4, 0.4));
     assert_eq!((s.camera.width, s.camera.height, s.spp), (32, 32, 8));
 }

@@ -166,14 +166,14 @@ fn hetero_sigmat_half_cell_offset_fails() {
     let path = dir.join("test_hetero_sigmat_volpath.xml");
     let mut scene = load_file(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     for m in &mut scene.media {
-        let Some(h) = m.hetero.clone() else { continue };
+        let Some(h) = m.as_grid().cloned() else { continue };
         let VolumeData::Grid { grid, .. } = &h.sigma_t.data else { panic!("a grid") };
         let shift = glam::Affine3A::from_translation(glam::Vec3::new(0.5 / grid.res[0] as f32, 0.0, 0.0));
         let mut sigma_t = Volume::new(h.sigma_t.data.clone(), h.sigma_t.to_local.inverse() * shift);
         // Same box (the clipping is not what is perturbed), shifted lookups.
         sigma_t.bbox = h.sigma_t.bbox;
         let majorants = MajorantGrid::build(&sigma_t, h.scale, [MAJORANT_RES; 3]);
-        m.hetero = Some(std::sync::Arc::new(Heterogeneous { sigma_t, majorants, ..(*h).clone() }));
+        m.kind = haze_scene::MediumKind::Grid(std::sync::Arc::new(Heterogeneous { sigma_t, majorants, ..h }));
     }
     let relaxed = verdict(
         "test_hetero_sigmat_volpath.xml with a half-cell offset",

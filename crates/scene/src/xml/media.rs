@@ -121,8 +121,7 @@ fn heterogeneous(p: &Params, name: String, doc: &Document) -> Result<Medium, Loa
     };
     let majorants = MajorantGrid::build(&sigma_t, scale, res);
     let hetero = Heterogeneous { sigma_t, albedo, scale, majorants };
-    let (bound, albedo_max) = (hetero.global_majorant(), hetero.albedo.max());
-    Ok(Medium { name, sigma_t: bound, albedo: albedo_max, phase, hetero: Some(Arc::new(hetero)) })
+    Ok(Medium::grid(name, Arc::new(hetero), phase))
 }
 
 /// The volume-valued parameter `name` of a medium: a float or RGB (a constant over the unit
