@@ -8,7 +8,7 @@
 //! of the `sigma_t` volume: outside it there is no extinction at all, even where the volume's
 //! wrap mode would give a value.
 
-use crate::medium::Flight;
+use crate::flight::Flight;
 use crate::volume::{Volume, VolumeData};
 use glam::Vec3;
 use haze_core::{Rgb, Sampler};

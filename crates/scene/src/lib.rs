@@ -12,6 +12,7 @@ pub mod camera;
 pub mod emitter;
 pub mod emitter_tables;
 pub mod envmap;
+mod flight;
 pub mod hetero;
 pub mod interaction;
 pub mod lights;
