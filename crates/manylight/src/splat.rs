@@ -64,7 +64,7 @@ use haze_core::streams::CAUSTIC_PATHS;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler, PI};
 use haze_render::integrators::transmittance_to;
-use haze_scene::camera::PixelFilter;
+use haze_scene::camera::{FilmProjector, PixelFilter};
 use haze_scene::lights::EmissionSample;
 use haze_scene::shape::Geometry;
 use haze_scene::{Emitter, MediumId, MediumKind, Scene};
@@ -334,7 +334,7 @@ impl CausticTracer {
     fn trace(
         &self,
         scene: &Scene,
-        view: &View,
+        view: &View<'_>,
         s: &mut Sampler,
         inv_paths: f32,
         out: &mut Vec<(f32, f32, Rgb)>,
@@ -539,62 +539,17 @@ fn filter_norms(filter: PixelFilter, n: usize) -> Vec<f32> {
         .collect()
 }
 
-/// Where a point lands on the film.
-struct Projection {
-    px: f32,
-    py: f32,
-    /// `(W H / A) / cos^3 θ` (cos θ from camera space, so any scale of `to_world` drops out).
-    density: f32,
-    /// The fraction of the way from the camera to the point where camera rays start (the
-    /// near clip plane).
-    near: f32,
-}
-
-/// The pinhole's constants.
-struct View {
+/// The pinhole's projection (`Camera::film_projector`) and the splats it makes.
+struct View<'a> {
+    projector: FilmProjector<'a>,
+    /// The pinhole.
     o: Vec3,
-    to_camera: glam::Mat4,
-    tan_x: f32,
-    tan_y: f32,
-    /// `W H / A`: pixels per unit area of the image plane at distance 1.
-    pixel_density: f32,
 }
 
-impl View {
-    fn new(scene: &Scene) -> Self {
-        let cam = &scene.camera;
-        let tan_x = (0.5 * cam.fov_x_deg.to_radians()).tan();
-        let tan_y = tan_x * cam.height as f32 / cam.width as f32;
-        View {
-            o: cam.position(),
-            to_camera: cam.to_world.inverse(),
-            tan_x,
-            tan_y,
-            pixel_density: (cam.width * cam.height) as f32 / (4.0 * tan_x * tan_y),
-        }
-    }
-
-    /// The film position of `p` and `(W H / A) / cos^3 θ`, or `None` outside the film and the
-    /// clip planes; with `q.z / |q|`-based cos θ, `near / q.z` the fraction of the way from the
-    /// camera where its rays start.
-    fn project(&self, cam: &haze_scene::camera::Camera, p: Vec3) -> Option<Projection> {
-        let q = self.to_camera.transform_point3(p);
-        if !(q.z >= cam.near_clip && q.z <= cam.far_clip) {
-            return None;
-        }
-        let (sx, sy) = (q.x / (q.z * self.tan_x), q.y / (q.z * self.tan_y));
-        let px = (1.0 - sx) * 0.5 * cam.width as f32;
-        let py = (1.0 - sy) * 0.5 * cam.height as f32;
-        if !(px >= 0.0 && px < cam.width as f32 && py >= 0.0 && py < cam.height as f32) {
-            return None;
-        }
-        let cos = q.z / q.length();
-        Some(Projection {
-            px,
-            py,
-            density: self.pixel_density / (cos * cos * cos),
-            near: cam.near_clip / q.z,
-        })
+impl<'a> View<'a> {
+    fn new(scene: &'a Scene) -> Self {
+        let projector = scene.camera.film_projector().expect("caustic paths need a pinhole camera");
+        View { o: projector.o, projector }
     }
 
     /// A beam's single scattering towards the camera: the beam `o + v d`, `v` in `[0, len]`, in
@@ -619,7 +574,7 @@ impl View {
         let seg = crate::vrl::Segment::new(o, d, len);
         let (v, theta_over_h) = crate::vpl::estimator::sample_distance_towards(&seg, self.o, u, None)?;
         let x = seg.at(v);
-        let pr = self.project(&scene.camera, x)?;
+        let pr = self.projector.project(x)?;
         let to_cam = self.o - x;
         let dist = to_cam.length();
         if dist <= 0.0 {
@@ -646,7 +601,7 @@ impl View {
 
     /// A surface point's splat: `vpl`'s intensity towards the camera (module docs).
     fn connect_surface(&self, scene: &Scene, vpl: &SurfaceVpl) -> Option<(f32, f32, Rgb)> {
-        let pr = self.project(&scene.camera, vpl.p)?;
+        let pr = self.projector.project(vpl.p)?;
         let v = self.o - vpl.p;
         let d = v.length();
         if d <= 0.0 {

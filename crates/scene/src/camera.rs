@@ -183,6 +183,76 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// The pinhole's projection of world points onto the film, the inverse of
+    /// [`Self::ray_generator`] (the same slopes); `None` for other projections, whose rays do
+    /// not meet in one point.
+    pub fn film_projector(&self) -> Option<FilmProjector<'_>> {
+        if !self.is_pinhole() {
+            return None;
+        }
+        let RayGenerator { tan_x, tan_y, o, .. } = self.ray_generator();
+        Some(FilmProjector {
+            cam: self,
+            o,
+            to_camera: self.to_world.inverse(),
+            tan_x,
+            tan_y,
+            pixel_density: (self.width * self.height) as f32 / (4.0 * tan_x * tan_y),
+        })
+    }
+}
+
+/// Where a world point lands on a pinhole camera's film ([`FilmProjector::project`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmPoint {
+    /// Film position in pixel units, `[0, width) x [0, height)`.
+    pub px: f32,
+    pub py: f32,
+    /// `(W H / A) / cos^3 θ`, with `A = 4 tan_x tan_y` the film's area at distance 1 and θ the
+    /// angle from the optical axis (cos θ from camera space, so any scale of `to_world` drops
+    /// out): the factor by which a light tracer's splat at this point, of radiance arriving at
+    /// the pinhole per unit solid angle, becomes a pixel value (`crate`'s users: the caustic
+    /// paths, `haze_manylight::splat`).
+    pub density: f32,
+    /// The fraction of the way from the pinhole to the point where camera rays start (the near
+    /// clip plane): only what lies beyond it is seen.
+    pub near: f32,
+}
+
+/// A pinhole camera's projection with its constants computed once ([`Camera::film_projector`]).
+pub struct FilmProjector<'a> {
+    cam: &'a Camera,
+    /// The pinhole.
+    pub o: Vec3,
+    to_camera: Mat4,
+    tan_x: f32,
+    tan_y: f32,
+    /// `W H / A`: pixels per unit area of the image plane at distance 1.
+    pixel_density: f32,
+}
+
+impl FilmProjector<'_> {
+    /// The film point of world point `p`, or `None` outside the film or the clip planes:
+    /// with `q` the camera-space point, `s = (q.x / (q.z tan_x), q.y / (q.z tan_y))` and pixel
+    /// `((1 - s.x) W / 2, (1 - s.y) H / 2)`, inverting [`RayGenerator::generate_through`].
+    pub fn project(&self, p: Vec3) -> Option<FilmPoint> {
+        let cam = self.cam;
+        let q = self.to_camera.transform_point3(p);
+        if !(q.z >= cam.near_clip && q.z <= cam.far_clip) {
+            return None;
+        }
+        let (sx, sy) = (q.x / (q.z * self.tan_x), q.y / (q.z * self.tan_y));
+        let px = (1.0 - sx) * 0.5 * cam.width as f32;
+        let py = (1.0 - sy) * 0.5 * cam.height as f32;
+        if !(px >= 0.0 && px < cam.width as f32 && py >= 0.0 && py < cam.height as f32) {
+            return None;
+        }
+        let cos = q.z / q.length();
+        Some(FilmPoint { px, py, density: self.pixel_density / (cos * cos * cos), near: cam.near_clip / q.z })
+    }
+}
+
 /// Primary rays of a camera (see [`Camera::ray_generator`]).
 pub struct RayGenerator<'a> {
     cam: &'a Camera,
