@@ -106,6 +106,25 @@ fn textures_nested_and_referenced() {
     assert!(close(p.specular_sampling_weight, 1.0 / 1.3));
 }
 
+/// A shape without a `<bsdf>` reflects as a grey `diffuse` (0.5), but an emitting one is black, as
+/// in Mitsuba 3: a bare area light reflects nothing. A given BSDF is kept on an emitter.
+#[test]
+fn default_bsdf_is_black_on_emitters() {
+    let diffuse = |r: f32| Bsdf::Diffuse { reflectance: Rgb::splat(r).into() };
+    assert_eq!(bsdf_of(""), diffuse(0.5));
+    assert_eq!(bsdf_of(r#"<emitter type="area"/>"#), diffuse(0.0));
+    assert_eq!(
+        bsdf_of(r#"<emitter type="area"/><bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf>"#),
+        diffuse(0.3)
+    );
+    let s = load_result(
+        r#"<bsdf type="diffuse" id="grey"><rgb name="reflectance" value="0.6"/></bsdf>
+           <shape type="rectangle"><ref id="grey"/><emitter type="area"/></shape>"#,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes[0].bsdf, diffuse(0.6));
+}
+
 #[test]
 fn twosided_wraps_one_bsdf() {
     let s = load_result(

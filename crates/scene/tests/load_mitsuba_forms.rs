@@ -412,6 +412,74 @@ fn cylinders_are_open_tubes_around_their_axis() {
     assert!(e.message.contains("'radius' must be > 0"), "{e}");
 }
 
+/// A cylinder's `uv` is Mitsuba 3's (`u = phi / 2 pi` from the axis frame's `x`, `v` from `p0` to
+/// `p1`): rays and the `uv` Mitsuba 3.9.1 (`scalar_rgb`, `ray_intersect`) reports for them, on
+/// three cylinders under a rotation and a translation, one with its axis along `-z` (the other
+/// branch of the frame) and one with its axis along `x` (`n.z = 0`). The tolerance covers the
+/// tessellation and the rays' rounding to 4-6 digits.
+#[test]
+fn cylinder_uv_is_mitsubas() {
+    /// A ray (origin, direction) and the uv Mitsuba reports at its hit.
+    type Probe = ([f32; 3], [f32; 3], [f32; 2]);
+    /// `p0`, `p1`, `radius` and four probes.
+    type Case = ([f32; 3], [f32; 3], f32, [Probe; 4]);
+    let cases: [Case; 3] = [
+        (
+            [0.3, -0.2, 0.5],
+            [1.1, 0.7, -0.4],
+            0.6,
+            [
+                ([1.1361, 1.445, -0.4033], [-0.172605, -0.844559, 0.50688], [0.31365, 0.18219]),
+                ([1.3718, 5.6109, -1.2755], [-0.075818, -0.926396, 0.36884], [0.66680, 0.89617]),
+                ([1.5529, -3.4719, 0.5763], [-0.06407, 0.997927, -0.006098], [0.15930, 0.36431]),
+                ([-6.4737, -4.9082, -6.6736], [0.648281, 0.411107, 0.640877], [0.30807, 0.33744]),
+            ],
+        ),
+        (
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, -1.0],
+            1.0,
+            [
+                ([-4.6502, 0.3046, 6.0023], [0.634792, -0.006689, -0.772654], [0.54214, 0.49617]),
+                ([-2.3159, 8.0017, 3.616], [0.251722, -0.910464, -0.328164], [0.62842, 0.40837]),
+                ([-0.5051, 2.7316, 0.3009], [0.383442, -0.923215, 0.025436], [0.76261, 0.70634]),
+                ([1.0626, -1.8532, 1.0761], [-0.550389, 0.790909, -0.26746], [0.23759, 0.20156]),
+            ],
+        ),
+        (
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            0.5,
+            [
+                ([4.9611, 4.5809, -4.7941], [-0.512287, -0.586237, 0.627606], [0.96466, 0.34968]),
+                ([-0.4867, -0.3891, 5.5281], [0.371508, 0.05249, -0.926945], [0.54463, 0.31634]),
+                ([0.3652, 6.0941, -1.2121], [0.144747, -0.952859, 0.266662], [0.18782, 0.47110]),
+                ([0.5769, -4.4563, 0.4539], [0.135084, 0.98958, 0.049831], [0.74743, 0.35386]),
+            ],
+        ),
+    ];
+    for (p0, p1, radius, probes) in cases {
+        let [a, b, c] = p0;
+        let [d, e, f] = p1;
+        let s = load(&format!(
+            r#"{SENSOR}<shape type="cylinder"><point name="p0" value="{a}, {b}, {c}"/>
+               <point name="p1" value="{d}, {e}, {f}"/><float name="radius" value="{radius}"/>
+               <transform name="to_world"><rotate y="1" angle="30"/><translate x="0.5" z="1"/></transform></shape>"#
+        ));
+        for (o, dir, want) in probes {
+            let ray = haze_core::Ray::new(glam::Vec3::from(o), glam::Vec3::from(dir).normalize());
+            let hit = s.intersect(&ray).unwrap_or_else(|| panic!("{p0:?} {p1:?}: {o:?} misses"));
+            let du = (hit.uv.x - want[0]).abs();
+            let du = du.min(1.0 - du);
+            assert!(
+                du < 2e-3 && (hit.uv.y - want[1]).abs() < 2e-3,
+                "{p0:?} {p1:?}: uv {} vs Mitsuba's {want:?}",
+                hit.uv
+            );
+        }
+    }
+}
+
 #[test]
 fn masks_wrap_one_bsdf_with_an_opacity() {
     let Ok(haze_scene::Bsdf::Mask(m)) = bsdf_of(

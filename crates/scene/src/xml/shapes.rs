@@ -187,12 +187,20 @@ fn build_placed<'a>(
     b.shapes.push(Shape {
         name,
         geometry,
-        bsdf: bsdf.unwrap_or(Bsdf::Diffuse { reflectance: Rgb::splat(0.5).into() }),
+        bsdf: bsdf.unwrap_or_else(|| default_bsdf(emitter.is_some())),
         interior,
         exterior,
         emitter,
     });
     Ok(())
+}
+
+/// The BSDF of a shape that names none, as Mitsuba 3 (`Shape`'s constructor): a `diffuse` of
+/// reflectance 0.5, or of reflectance 0 if the shape emits, so that a bare area light reflects
+/// nothing (a grey one makes a quad light over a floor 5-8% brighter than Mitsuba's image).
+fn default_bsdf(emits: bool) -> Bsdf {
+    let reflectance = if emits { 0.0 } else { 0.5 };
+    Bsdf::Diffuse { reflectance: Rgb::splat(reflectance).into() }
 }
 
 /// `sphere`: `center` (origin) and `radius` (1), then `to_world`, which may rotate, translate
@@ -211,7 +219,7 @@ fn sphere(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, L
 
 /// `cylinder`: `p0` (origin), `p1` (0, 0, 1), `radius` (1): Mitsuba 3's open tube around the
 /// segment `p0 p1`, then `to_world`; tessellated ([`cylinder_mesh`]). The frame around the
-/// axis (where `u = 0` lies) is glam's `any_orthonormal_pair`, not necessarily Mitsuba's.
+/// axis, where `u = 0` lies, is Mitsuba's ([`axis_frame`]), so `uv` is Mitsuba's too.
 fn cylinder(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry, LoadError> {
     let p0 = p.point_opt("p0")?.unwrap_or(Vec3::ZERO);
     let p1 = p.point_opt("p1")?.unwrap_or(Vec3::Z);
@@ -225,12 +233,24 @@ fn cylinder(p: &Params, to_world: &Mat4, flip_normals: bool) -> Result<Geometry,
         return Err(p.error_at("p1", "'p0' and 'p1' must differ"));
     }
     let d = axis / length;
-    let (x, y) = d.any_orthonormal_pair();
+    let (x, y) = axis_frame(d);
     let local =
         Mat4::from_cols((x * radius).extend(0.0), (y * radius).extend(0.0), axis.extend(0.0), p0.extend(1.0));
     let placed = *to_world * local;
     require_invertible(p, &placed)?;
     Ok(Geometry::Mesh(cylinder_mesh(&placed, flip_normals)))
+}
+
+/// Two unit vectors completing the unit `n` to a right-handed orthonormal frame `(x, y, n)`:
+/// Duff et al. 2017, "Building an Orthonormal Basis, Revisited" (JCGT 6(1), Listing 3), with
+/// the sign of `n.z` taken as `+1` at zero, as Mitsuba 3's `coordinate_system` (which places its
+/// cylinder with it). Written out rather than taken from glam, whose `any_orthonormal_pair` is
+/// the same today but promises no particular pair.
+fn axis_frame(n: Vec3) -> (Vec3, Vec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
 }
 
 /// Geometry must lie within `MAX_COORDINATE` of the origin (the BVH cannot hold larger
