@@ -12,6 +12,7 @@
 //! because all pixels of one pass share its lights and are correlated.
 #![allow(dead_code)]
 
+use haze_core::SamplerSpec;
 use haze_manylight::integrators::{
     LightBudget, ManyLightSettings, PathTracedMedia, VplIntegrator, VrlIntegrator,
 };
@@ -36,6 +37,19 @@ pub fn render_passes<I: Integrator>(
     spp_per_pass: u32,
     seed: u64,
 ) -> Passes {
+    render_passes_with(scene, integrator, passes, spp_per_pass, seed, SamplerSpec::default())
+}
+
+/// [`render_passes`] with the sample generator `sampler` (pass `k`'s samples are the pattern's
+/// indices `k spp_per_pass ..`, as in a progressive render).
+pub fn render_passes_with<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    passes: u32,
+    spp_per_pass: u32,
+    seed: u64,
+    sampler: SamplerSpec,
+) -> Passes {
     let mut total: Option<Film> = None;
     let mut pass_means = Vec::new();
     for k in 0..passes {
@@ -46,7 +60,7 @@ pub fn render_passes<I: Integrator>(
             components: true,
             time_limit: None,
             first_pass: k,
-            sampler: Default::default(),
+            sampler,
         };
         let out = render(scene, integrator, &settings, &AtomicBool::new(false), |_| {});
         assert_eq!(out.invalid_samples, 0);
