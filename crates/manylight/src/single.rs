@@ -22,7 +22,7 @@
 use crate::camera::{estimator_medium, CameraSegment};
 use crate::vrl::sampling::{equiangular_pdf, sample_equiangular};
 use crate::vrl::Segment;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2};
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
 use haze_scene::marched::MarchedDistance;
@@ -46,13 +46,15 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
             total += from_infinity(scene, cs, i, u_light, u_dist, sampler);
             continue;
         }
-        let Some(light) = LightPoint::sample(scene, i, u_light) else { continue };
+        let Some(light) = scene.sample_emitter_point(i as u32, u_light) else { continue };
         // Where on the segment the light can arrive (module docs).
-        let (a, b) = match &light.kind {
-            LightKind::Spot { to_local, cutoff, .. } => match spot_interval(to_local, *cutoff, &cs.seg) {
-                Some(ab) => ab,
-                None => continue,
-            },
+        let (a, b) = match &scene.emitters[i] {
+            Emitter::Spot { to_local, cutoff_angle, .. } => {
+                match spot_interval(to_local, *cutoff_angle, &cs.seg) {
+                    Some(ab) => ab,
+                    None => continue,
+                }
+            }
             _ => (0.0, cs.seg.len),
         };
         let (u, pdf) = match &hetero {
@@ -79,7 +81,7 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
             continue;
         }
         let wi = to_light / dist;
-        let e_val = light.emitted(-wi);
+        let e_val = scene.emitted_intensity(&light, -wi) / light.pdf;
         if e_val.is_black() {
             continue;
         }
@@ -233,76 +235,10 @@ pub fn spot_interval(to_local: &Mat4, cutoff: f32, seg: &Segment) -> Option<(f32
     (lo < hi).then_some((lo, hi))
 }
 
-/// A sampled point on an emitter.
-struct LightPoint {
-    p: Vec3,
-    kind: LightKind,
-}
-
-enum LightKind {
-    Point {
-        intensity: Rgb,
-    },
-    Spot {
-        to_local: Mat4,
-        intensity: Rgb,
-        cutoff: f32,
-        beam: f32,
-    },
-    /// `radiance / p_area`, and the surface normal.
-    Area {
-        weighted_radiance: Rgb,
-        n: Vec3,
-    },
-}
-
-impl LightPoint {
-    fn sample(scene: &Scene, i: usize, u: Vec2) -> Option<Self> {
-        match &scene.emitters[i] {
-            Emitter::Point { position, intensity } => {
-                Some(LightPoint { p: *position, kind: LightKind::Point { intensity: *intensity } })
-            }
-            Emitter::Spot { to_world, intensity, cutoff_angle, beam_width, to_local, .. } => {
-                Some(LightPoint {
-                    p: to_world.transform_point3(Vec3::ZERO),
-                    kind: LightKind::Spot {
-                        to_local: *to_local,
-                        intensity: *intensity,
-                        cutoff: *cutoff_angle,
-                        beam: *beam_width,
-                    },
-                })
-            }
-            Emitter::Area { radiance, .. } => {
-                let s = scene.sample_area_emitter_point(i, u)?;
-                Some(LightPoint {
-                    p: s.p,
-                    kind: LightKind::Area { weighted_radiance: radiance.eval(s.tex) / s.pdf, n: s.n },
-                })
-            }
-            // volpath only: the engine refuses many-light methods on scenes with one.
-            Emitter::Projector(_) => None,
-            // At infinity: `from_infinity`.
-            Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Directional { .. } => None,
-        }
-    }
-
-    /// Intensity leaving the point in the unit direction `d` (for area lights: radiance times
-    /// `cos` over the area pdf, zero behind the surface).
-    fn emitted(&self, d: Vec3) -> Rgb {
-        match &self.kind {
-            LightKind::Point { intensity } => *intensity,
-            LightKind::Spot { to_local, intensity, cutoff, beam } => {
-                *intensity * Emitter::spot_falloff(*cutoff, *beam, to_local.transform_vector3(d).normalize())
-            }
-            LightKind::Area { weighted_radiance, n } => *weighted_radiance * n.dot(d).max(0.0),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
     use haze_scene::{load_str, LoadOptions};
     use std::f32::consts::PI;
     use std::path::Path;

@@ -203,38 +203,19 @@ impl CausticTracer {
                 emitter: k,
             });
         }
-        let (p, n, p_pos) = match &scene.emitters[k as usize] {
-            Emitter::Point { position, .. } => (*position, None, 1.0),
-            Emitter::Spot { to_world, .. } => (to_world.transform_point3(Vec3::ZERO), None, 1.0),
-            Emitter::Area { shape, .. } => {
-                let table = scene.area_sampler(k)?;
-                let ss = table.sample(&scene.shapes[*shape as usize], u_pos);
-                (ss.p, Some((ss.n, ss.tex)), ss.pdf)
-            }
-            _ => return None,
-        };
-        let (d, pdf_dir) = self.sample_direction(p, u_pick, u_dir)?;
-        let le = match &scene.emitters[k as usize] {
-            Emitter::Point { intensity, .. } => *intensity,
-            Emitter::Spot { intensity, cutoff_angle, beam_width, to_local, cos_cutoff, cos_beam, .. } => {
-                let local = to_local.transform_vector3(d).normalize();
-                *intensity
-                    * Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, *cos_cutoff, *cos_beam, local)
-            }
-            Emitter::Area { shape, .. } => {
-                let (nn, tex) = n?;
-                let cos = nn.dot(d);
-                if cos <= 0.0 {
-                    return None;
-                }
-                scene.area_radiance(*shape, nn, tex, d).map(|(_, le)| le)? * cos
-            }
-            _ => return None,
-        };
+        let ep = scene.sample_emitter_point(k, u_pos)?;
+        let (d, pdf_dir) = self.sample_direction(ep.p, u_pick, u_dir)?;
+        let le = scene.emitted_intensity(&ep, d);
         if le.is_black() {
             return None;
         }
-        Some(EmissionSample { p, d, n: n.map(|(n, _)| n), weight: le / (p_k * p_pos * pdf_dir), emitter: k })
+        Some(EmissionSample {
+            p: ep.p,
+            d,
+            n: ep.surface.map(|(n, _)| n),
+            weight: le / (p_k * ep.pdf * pdf_dir),
+            emitter: k,
+        })
     }
 
     /// A line of the sun's direction `d` aimed at the targets (the parallel-light form of the

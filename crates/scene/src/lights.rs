@@ -469,13 +469,66 @@ impl Scene {
     }
 }
 
+/// A point sampled on an emitter at a finite position: where a light path or a connection to
+/// the emitter starts. [`Scene::emitted_intensity`] evaluates what leaves it in a direction, so
+/// that the callers (the caustic paths' emission, single scattering's light points) do not
+/// match the emitter kinds themselves.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterPoint {
+    pub emitter: u32,
+    pub p: Vec3,
+    /// The surface normal and texture point of an area emitter's point; `None` at a point or
+    /// spot light.
+    pub surface: Option<(Vec3, TexPoint)>,
+    /// Density of `p` per unit area on an area emitter; 1 at a point or spot light (a delta
+    /// position, chosen with certainty).
+    pub pdf: f32,
+}
+
 impl Scene {
-    /// A point sampled uniformly by area on the area emitter `emitter` (pdf per unit area in
-    /// the result); `None` for other emitter kinds.
-    pub fn sample_area_emitter_point(&self, emitter: usize, u: Vec2) -> Option<crate::shape::SurfaceSample> {
-        let Emitter::Area { shape, .. } = &self.emitters[emitter] else { return None };
-        let table = self.emitter_tables.area[emitter].as_ref()?;
-        Some(table.sample(&self.shapes[*shape as usize], u))
+    /// A point on the emitter `emitter`: a point or spot light's position, or a point of an area
+    /// emitter uniform by area (as Mitsuba 3's shape `sample_position`). `None` for emitters at
+    /// infinity (`constant`, `envmap`, `directional`) and for the `projector`, which only
+    /// volpath renders.
+    pub fn sample_emitter_point(&self, emitter: u32, u: Vec2) -> Option<EmitterPoint> {
+        let (p, surface, pdf) = match &self.emitters[emitter as usize] {
+            Emitter::Point { position, .. } => (*position, None, 1.0),
+            Emitter::Spot { to_world, .. } => (to_world.transform_point3(Vec3::ZERO), None, 1.0),
+            Emitter::Area { shape, .. } => {
+                let table = self.emitter_tables.area.get(emitter as usize)?.as_ref()?;
+                let ss = table.sample(&self.shapes[*shape as usize], u);
+                (ss.p, Some((ss.n, ss.tex)), ss.pdf)
+            }
+            Emitter::Projector(_)
+            | Emitter::Constant { .. }
+            | Emitter::EnvMap(_)
+            | Emitter::Directional { .. } => return None,
+        };
+        Some(EmitterPoint { emitter, p, surface, pdf })
+    }
+
+    /// Radiant intensity leaving `ep` in the unit direction `d`, per unit solid angle (and, on
+    /// an area emitter, per unit area): `I` at a point light, `I falloff(d)` at a spot light,
+    /// `L(uv) cos(n, d)` on an area emitter, zero behind its surface. Divided by `ep.pdf` it is
+    /// the estimate of the emitter's intensity towards `d`.
+    pub fn emitted_intensity(&self, ep: &EmitterPoint, d: Vec3) -> Rgb {
+        match &self.emitters[ep.emitter as usize] {
+            Emitter::Point { intensity, .. } => *intensity,
+            Emitter::Spot { intensity, cutoff_angle, beam_width, to_local, cos_cutoff, cos_beam, .. } => {
+                let local = to_local.transform_vector3(d).normalize();
+                *intensity
+                    * Emitter::spot_falloff_cos(*cutoff_angle, *beam_width, *cos_cutoff, *cos_beam, local)
+            }
+            Emitter::Area { shape, .. } => {
+                let Some((n, tex)) = ep.surface else { return Rgb::ZERO };
+                let cos = n.dot(d);
+                match self.area_radiance(*shape, n, tex, d) {
+                    Some((_, le)) if cos > 0.0 => le * cos,
+                    _ => Rgb::ZERO,
+                }
+            }
+            _ => Rgb::ZERO,
+        }
     }
 }
 
