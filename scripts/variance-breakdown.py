@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Where the many-light methods' error comes from (docs/results.md, "Variance by source").
+"""Where the many-light methods' error comes from (docs/results.md, "Where the variance comes from").
 
 For each scene and method, two independent renders (seeds 1 and 2) with `--components` and one
 sample per pixel per pass (so every sample has its own light set and the per-sample variance is
