@@ -6,8 +6,8 @@ use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
 use anyhow::{anyhow, bail, Result};
 use haze_core::SamplerSpec;
 use haze_manylight::integrators::{
-    CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator,
-    Vrls,
+    Clamps, CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls,
+    VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -118,14 +118,13 @@ impl Method {
         Ok(match kind {
             MethodKind::VolPath => Method::VolPath(VolPath::from_spec(&scene.integrator)),
             MethodKind::Vrl => {
-                let mut i = VrlIntegrator::new(scene, many_light(), seed).map_err(named)?;
-                i.clamp = options.clamp;
+                let mut i = VrlIntegrator::exhaustive(scene, many_light(), seed).map_err(named)?;
+                i.clamps.surface = options.clamp;
                 Method::Vrl(i)
             }
             MethodKind::Vpl => {
-                let mut i =
-                    VplIntegrator::new(scene, many_light(), seed, options.vpl_clamp).map_err(named)?;
-                i.surface_clamp = options.clamp;
+                let mut i = VplIntegrator::exhaustive(scene, many_light(), seed).map_err(named)?;
+                i.clamps = Clamps { vpl: options.vpl_clamp, surface: options.clamp, ..i.clamps };
                 Method::Vpl(i)
             }
             MethodKind::VrlLightcuts => Method::VrlLightcuts(

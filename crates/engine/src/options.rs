@@ -591,6 +591,8 @@ pub const OPTIONS: &[OptionSpec] = &[
                 match o.method.lightcuts.strategy {
                     CutStrategy::Stochastic => "stochastic",
                     CutStrategy::Bound => "bound",
+                    // `vrl` and `vpl` (not an option value: they are the methods of their own).
+                    CutStrategy::Exhaustive => "exhaustive",
                 }
                 .into(),
             )

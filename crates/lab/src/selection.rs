@@ -16,7 +16,7 @@
 //! on the hot path.
 
 use haze_core::rng::mix64;
-use haze_manylight::integrators::{ClusterKind, CutObserver, SegmentCut};
+use haze_manylight::integrators::{Clamps, ClusterKind, CutObserver, SegmentCut};
 use haze_manylight::tree::stochastic::{light_probabilities, power as tree_power};
 use std::sync::Mutex;
 
@@ -102,7 +102,8 @@ fn record<K: ClusterKind>(cut: &SegmentCut<'_, K>) -> Option<SelectionRecord> {
         .map(|(i, l)| {
             let (mut s1, mut s2) = (0.0, 0.0);
             for m in 0..PROBE_SAMPLES {
-                let v = K::contribution(scene, cs, media, l, mix64(key ^ (m + 1)), i as u32);
+                let v =
+                    K::contribution(scene, cs, media, l, mix64(key ^ (m + 1)), i as u32, &Clamps::default());
                 let x = (v[0] + v[1] + v[2]) as f64;
                 s1 += x;
                 s2 += x * x;

@@ -45,7 +45,7 @@ fn hide_emitters_hides_what_the_camera_sees_directly() {
     let reference = check_against_volpath(&scene, "foggy-room, hide_emitters: ", 150, 48, true);
     assert!(reference.film.mean(Some(Component::Emitted)).iter().all(|&v| v == 0.0));
     let shown = load_small("foggy-room");
-    let vrl = VrlIntegrator::new(&shown, settings(&shown, 150), 1).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&shown, settings(&shown, 150), 1).unwrap();
     let wrong = render_passes(&shown, &vrl, 48, 1, 1);
     let (r, mean_z) = compare(&wrong, &reference, Component::Emitted);
     println!("foggy-room, lamp shown against hidden, emitted: {r}; image-mean z = {mean_z:.2}");
@@ -62,9 +62,20 @@ fn hg_box_components_match_volpath() {
 #[test]
 fn light_path_count_does_not_change_the_expected_image() {
     let scene = load_small("foggy-room");
-    let a = render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, 60), 3).unwrap(), 256, 1, 3);
-    let mut b =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, 120), 4).unwrap(), 256, 1, 4);
+    let a = render_passes(
+        &scene,
+        &VrlIntegrator::exhaustive(&scene, settings(&scene, 60), 3).unwrap(),
+        256,
+        1,
+        3,
+    );
+    let mut b = render_passes(
+        &scene,
+        &VrlIntegrator::exhaustive(&scene, settings(&scene, 120), 4).unwrap(),
+        256,
+        1,
+        4,
+    );
     let (r, mean_z) = compare(&a, &b, Component::Multiple);
     println!("60 vs 120 paths per pass: {r}; image-mean z = {mean_z:.2}");
     assert!(mean_z.abs() < 4.0, "{r}; image-mean z = {mean_z:.2}");
@@ -89,8 +100,9 @@ fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
     use haze_manylight::tree::stochastic::StochasticSettings;
     let scene = load_small(name);
     let ml = settings(&scene, paths);
-    let vrl = render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 21).unwrap(), passes, 1, 21);
-    let vpl = render_passes(&scene, &VplIntegrator::new(&scene, ml, 22, None).unwrap(), passes, 1, 22);
+    let vrl =
+        render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 21).unwrap(), passes, 1, 21);
+    let vpl = render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml, 22).unwrap(), passes, 1, 22);
     let mut failures = Vec::new();
     for cut_size in [1, 4, 16] {
         let lc = LightcutSettings {
@@ -167,7 +179,8 @@ fn glass_ball_room_whole_image_matches_volpath() {
     let (paths, passes) = (20, 40);
     let reference = check_against_volpath(&scene, "", paths, passes, true);
     let off = TestControls { gather_point_scale: 0.0, ..TestControls::default() };
-    let wrong = VrlIntegrator::with_test_controls(&scene, settings(&scene, paths), 1, off).unwrap();
+    let wrong =
+        VrlIntegrator::exhaustive(&scene, settings(&scene, paths), 1).unwrap().with_test_controls(off);
     let wrong = render_passes(&scene, &wrong, 2 * passes, 1, 1);
     let (r, mean_z) = compare(&wrong, &reference, Component::Surface);
     println!("vrl without the light at gathering points, surface: {r}; per-pass image-mean z = {mean_z:.2}");
@@ -199,17 +212,23 @@ fn caustic_paths_match_the_camera_continuation() {
     let mut failures = Vec::new();
     for filter in [PixelFilter::Box, PixelFilter::MITSUBA_DEFAULT] {
         scene.camera.filter = filter;
-        let continuation =
-            render_passes(&scene, &VrlIntegrator::new(&scene, with(&scene, 0), 1).unwrap(), passes, 16, 1);
-        let splatting = VrlIntegrator::new(&scene, with(&scene, 2000), 1).unwrap();
+        let continuation = render_passes(
+            &scene,
+            &VrlIntegrator::exhaustive(&scene, with(&scene, 0), 1).unwrap(),
+            passes,
+            16,
+            1,
+        );
+        let splatting = VrlIntegrator::exhaustive(&scene, with(&scene, 2000), 1).unwrap();
         let splats = render_passes(&scene, &splatting, passes, 16, 1);
         let (r, _) = compare(&splats, &continuation, Component::Surface);
         let z = paired_z(&splats, &continuation, Component::Surface);
         judge(&mut failures, &format!("{filter:?}: caustic paths vs continuation (paired z)"), &r, z, 0.01);
         if filter == PixelFilter::Box {
             let brighter = TestControls { caustic_scale: 1.2, ..TestControls::default() };
-            let splatting =
-                VrlIntegrator::with_test_controls(&scene, with(&scene, 2000), 1, brighter).unwrap();
+            let splatting = VrlIntegrator::exhaustive(&scene, with(&scene, 2000), 1)
+                .unwrap()
+                .with_test_controls(brighter);
             let wrong = render_passes(&scene, &splatting, passes, 16, 1);
             let z = paired_z(&wrong, &continuation, Component::Surface);
             println!("caustic splats x 1.2: paired image-mean z = {z:.2}");
@@ -236,7 +255,9 @@ fn split_at_the_first_glass_vertex_matches_the_unsplit_walk() {
     let (paths, passes) = (20, 48);
     let with_split = |split: Option<f32>, seed: u64| {
         let controls = TestControls { split, ..TestControls::default() };
-        let i = VrlIntegrator::with_test_controls(&scene, settings(&scene, paths), seed, controls).unwrap();
+        let i = VrlIntegrator::exhaustive(&scene, settings(&scene, paths), seed)
+            .unwrap()
+            .with_test_controls(controls);
         render_passes(&scene, &i, passes, 4, seed)
     };
     // Same seeds: the passes' light paths are the same, the camera paths part at the glass.
@@ -283,8 +304,8 @@ fn glass_beam_renders_with_every_integrator_without_nan() {
     let (ml, lc) = (settings(&scene, 20), LightcutSettings::default());
     let films = [
         render_passes(&scene, &VolPath::from_spec(&scene.integrator), 1, 4, 1).film,
-        render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 1).unwrap(), 4, 1, 1).film,
-        render_passes(&scene, &VplIntegrator::new(&scene, ml.clone(), 1, None).unwrap(), 4, 1, 1).film,
+        render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 1).unwrap(), 4, 1, 1).film,
+        render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml.clone(), 1).unwrap(), 4, 1, 1).film,
         render_passes(&scene, &LightcutsIntegrator::<Vrls>::new(&scene, ml.clone(), lc, 1).unwrap(), 4, 1, 1)
             .film,
         render_passes(&scene, &LightcutsIntegrator::<Vpls>::new(&scene, ml, lc, 1).unwrap(), 4, 1, 1).film,
@@ -384,7 +405,7 @@ fn check_smoke(room: bool) {
     let (paths, passes) = (20, 48);
     let reference = check_against_volpath(&scene, label, paths, passes, true);
     let perturbed = smoke_scene(room, 0.5);
-    let vrl = VrlIntegrator::new(&perturbed, settings(&perturbed, paths), 1).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&perturbed, settings(&perturbed, paths), 1).unwrap();
     let wrong = render_passes(&perturbed, &vrl, 4 * passes, 1, 1);
     let caught = caught_in_any_component(&wrong, &reference, &format!("{label}vrl, density half a cell off"));
     assert!(caught, "{label}: the density lookup half a cell off went unnoticed");
@@ -412,7 +433,7 @@ fn path_traced_media_match_volpath_in_smoke() {
     let reference = volpath_reference(&scene);
     check_methods_with(&scene, &reference, "smoke puff, path-traced: ", &ml, 48, true);
     let perturbed = smoke_scene(false, 0.5);
-    let vrl = VrlIntegrator::new(&perturbed, ml.clone(), 1).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&perturbed, ml.clone(), 1).unwrap();
     let wrong = render_passes(&perturbed, &vrl, 192, 1, 1);
     let caught = caught_in_any_component(&wrong, &reference, "path-traced, density half a cell off");
     assert!(caught, "path-traced smoke: the density lookup half a cell off went unnoticed");
@@ -433,7 +454,7 @@ fn path_traced_media_leave_the_caustics_seen_directly_to_the_caustic_paths() {
     let reference = volpath_reference(&scene);
     check_methods_with(&scene, &reference, "caustic room, path-traced: ", &ml, 48, true);
     let brighter = TestControls { caustic_scale: 1.2, ..TestControls::default() };
-    let vrl = VrlIntegrator::with_test_controls(&scene, ml.clone(), 1, brighter).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&scene, ml.clone(), 1).unwrap().with_test_controls(brighter);
     let wrong = render_passes(&scene, &vrl, 48, 16, 1);
     let (r, mean_z) = compare(&wrong, &reference, Component::Surface);
     println!("path-traced, caustic splats x 1.2, surface: {r}; image-mean z = {mean_z:.2}");
@@ -473,8 +494,9 @@ fn caustic_paths_match_the_camera_continuation_in_smoke() {
         caustic_paths: Some(caustic_paths),
         ..settings(&scene, paths)
     };
-    let continuation = render_passes(&scene, &VrlIntegrator::new(&scene, with(0), 1).unwrap(), passes, 16, 1);
-    let splatting = VrlIntegrator::new(&scene, with(2000), 1).unwrap();
+    let continuation =
+        render_passes(&scene, &VrlIntegrator::exhaustive(&scene, with(0), 1).unwrap(), passes, 16, 1);
+    let splatting = VrlIntegrator::exhaustive(&scene, with(2000), 1).unwrap();
     let splats = render_passes(&scene, &splatting, passes, 16, 1);
     let (r, _) = compare(&splats, &continuation, Component::Surface);
     let z = paired_z(&splats, &continuation, Component::Surface);
@@ -482,7 +504,7 @@ fn caustic_paths_match_the_camera_continuation_in_smoke() {
     judge(&mut failures, "smoke: caustic paths vs continuation (paired z)", &r, z, 0.01);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     let brighter = TestControls { caustic_scale: 1.2, ..TestControls::default() };
-    let splatting = VrlIntegrator::with_test_controls(&scene, with(2000), 1, brighter).unwrap();
+    let splatting = VrlIntegrator::exhaustive(&scene, with(2000), 1).unwrap().with_test_controls(brighter);
     let wrong = render_passes(&scene, &splatting, passes, 16, 1);
     let z = paired_z(&wrong, &continuation, Component::Surface);
     println!("smoke: caustic splats x 1.2: paired image-mean z = {z:.2}");
@@ -507,8 +529,8 @@ fn smoke_bound_cut_matches_brute_force() {
         ..Default::default()
     };
     let (a, b) = lightcut_renders(&scene, paths, 2, exhaustive, [9, 9]);
-    let vrl = render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 9).unwrap(), 2, 1, 9);
-    let vpl = render_passes(&scene, &VplIntegrator::new(&scene, ml.clone(), 9, None).unwrap(), 2, 1, 9);
+    let vrl = render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 9).unwrap(), 2, 1, 9);
+    let vpl = render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml.clone(), 9).unwrap(), 2, 1, 9);
     for (what, x, y) in [("vrl", &a, &vrl), ("vpl", &b, &vpl)] {
         let (mx, my) = (x.film.mean(Some(Component::Multiple)), y.film.mean(Some(Component::Multiple)));
         let worst = mx
@@ -528,8 +550,9 @@ fn smoke_bound_cut_matches_brute_force() {
         LightcutSettings { strategy: CutStrategy::Bound, ..Default::default() },
         [11, 12],
     );
-    let vrl = render_passes(&scene, &VrlIntegrator::new(&scene, ml.clone(), 13).unwrap(), passes, 1, 13);
-    let vpl = render_passes(&scene, &VplIntegrator::new(&scene, ml, 14, None).unwrap(), passes, 1, 14);
+    let vrl =
+        render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 13).unwrap(), passes, 1, 13);
+    let vpl = render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml, 14).unwrap(), passes, 1, 14);
     let mut failures = Vec::new();
     for (what, x, y) in
         [("vrl_lightcuts --cut bound vs vrl", &a, &vrl), ("vpl_lightcuts --cut bound vs vpl", &b, &vpl)]
@@ -551,17 +574,22 @@ fn compensated_clamp_keeps_the_expected_image() {
     let mut scene = load_small_path(&haze_testkit::data::repo_root().join("tests/data/glass-ball-room.xml"));
     (scene.camera.width, scene.camera.height) = (16, 12);
     let c = 1.0;
-    let plain =
-        render_passes(&scene, &VrlIntegrator::new(&scene, settings(&scene, 60), 3).unwrap(), 192, 1, 3);
+    let plain = render_passes(
+        &scene,
+        &VrlIntegrator::exhaustive(&scene, settings(&scene, 60), 3).unwrap(),
+        192,
+        1,
+        3,
+    );
     let ml = ManyLightSettings { compensated_clamp: Some(c), ..settings(&scene, 60) };
-    let compensated = render_passes(&scene, &VrlIntegrator::new(&scene, ml, 4).unwrap(), 192, 1, 4);
+    let compensated = render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml, 4).unwrap(), 192, 1, 4);
     let (r, mean_z) = compare(&compensated, &plain, Component::Surface);
     println!("compensated clamp vs unclamped, surface: {r}; image-mean z = {mean_z:.2}");
     let mut failures = Vec::new();
     judge(&mut failures, "compensated clamp, surface", &r, mean_z, 0.01);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    let mut biased = VrlIntegrator::new(&scene, settings(&scene, 60), 4).unwrap();
-    biased.clamp = Some(c);
+    let mut biased = VrlIntegrator::exhaustive(&scene, settings(&scene, 60), 4).unwrap();
+    biased.clamps.surface = Some(c);
     let biased = render_passes(&scene, &biased, 192, 1, 4);
     let (r, mean_z) = compare(&biased, &plain, Component::Surface);
     println!("clamp without compensation vs unclamped, surface: {r}; image-mean z = {mean_z:.2}");
@@ -614,7 +642,7 @@ fn rough_glass_ball_matches_volpath() {
     let (paths, passes) = (100, 200);
     let reference = check_against_volpath(&scene, "rough glass ", paths, passes, true);
     let dimmer = rough_glass_scene(0.6);
-    let vrl = VrlIntegrator::new(&dimmer, settings(&dimmer, paths), 1).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&dimmer, settings(&dimmer, paths), 1).unwrap();
     let wrong = render_passes(&dimmer, &vrl, passes, 1, 1);
     let caught = caught_in_any_component(&wrong, &reference, "rough glass, vrl with albedo 0.6");
     assert!(caught, "an 11% dimmer fog in the rough-glass ball went unnoticed");

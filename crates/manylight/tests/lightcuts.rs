@@ -75,13 +75,13 @@ fn exhaustive_cut_reproduces_brute_force() {
                 let a = film(&scene, &lc, 2, 9);
                 (
                     a,
-                    film(&scene, &VrlIntegrator::new(&scene, ml(&scene, 200), 9).unwrap(), 2, 9),
+                    film(&scene, &VrlIntegrator::exhaustive(&scene, ml(&scene, 200), 9).unwrap(), 2, 9),
                     lc.summary(),
                 )
             } else {
                 let lc = LightcutsIntegrator::<Vpls>::new(&scene, ml(&scene, 200), exhaustive, 9).unwrap();
                 let a = film(&scene, &lc, 2, 9);
-                let b = film(&scene, &VplIntegrator::new(&scene, ml(&scene, 200), 9, None).unwrap(), 2, 9);
+                let b = film(&scene, &VplIntegrator::exhaustive(&scene, ml(&scene, 200), 9).unwrap(), 2, 9);
                 (a, b, lc.summary())
             };
             let (ma, mb) = (a.mean(None), b.mean(None));
@@ -110,7 +110,7 @@ fn assert_lightcuts_match_vrl(
     let scene = load_small(name, 24, 18);
     let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, paths), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
-    let b = film(&scene, &VrlIntegrator::new(&scene, ml(&scene, paths), 6).unwrap(), passes, 6);
+    let b = film(&scene, &VrlIntegrator::exhaustive(&scene, ml(&scene, paths), 6).unwrap(), passes, 6);
     let r = z_test_multiple(&a, &b, 24, 18);
     println!("vrl_lightcuts ({label}) vs vrl, multiple: {r}; {}", lc.summary().unwrap());
     assert!(r.failed_fraction() <= 0.01, "{r}");

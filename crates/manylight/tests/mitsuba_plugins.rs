@@ -56,8 +56,8 @@ fn passed(r: &ZTestReport, mean_z: f64) -> bool {
 /// `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts` renders of `scene`, named.
 fn renders(scene: &Scene) -> Vec<(&'static str, Passes)> {
     let ml = settings(scene, PATHS);
-    let vrl = render_passes(scene, &VrlIntegrator::new(scene, ml.clone(), 1).unwrap(), PASSES, 1, 1);
-    let vpl = render_passes(scene, &VplIntegrator::new(scene, ml, 2, None).unwrap(), PASSES, 1, 2);
+    let vrl = render_passes(scene, &VrlIntegrator::exhaustive(scene, ml.clone(), 1).unwrap(), PASSES, 1, 1);
+    let vpl = render_passes(scene, &VplIntegrator::exhaustive(scene, ml, 2).unwrap(), PASSES, 1, 2);
     let (vrl_lc, vpl_lc) = lightcut_renders(scene, PATHS, PASSES, Default::default(), [5, 6]);
     vec![("vrl", vrl), ("vpl", vpl), ("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]
 }
@@ -89,7 +89,7 @@ fn mesh_attribute_matches_mitsuba() {
     let Bsdf::Diffuse { reflectance } = &flat.shapes[0].bsdf else { panic!("a diffuse") };
     assert!(matches!(reflectance, Texture::MeshAttribute(_)), "the vertex colours");
     flat.shapes[0].bsdf = Bsdf::Diffuse { reflectance: Texture::Constant(reflectance.mean()) };
-    let vrl = VrlIntegrator::new(&flat, settings(&flat, PATHS), 1).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&flat, settings(&flat, PATHS), 1).unwrap();
     let (r, mean_z) = against_reference(&render_passes(&flat, &vrl, PASSES, 1, 1), "mesh-attribute");
     println!("mesh-attribute, colours flattened, vrl: {r}; image-mean z = {mean_z:.2}");
     assert!(!passed(&r, mean_z), "vertex colours replaced by their mean went unnoticed: {r}");
@@ -108,7 +108,7 @@ fn textured_area_emitter_matches_mitsuba() {
     let haze_scene::Emitter::Area { radiance, .. } = &mut flat.emitters[0] else { panic!("an area emitter") };
     assert!(matches!(radiance, Texture::Bitmap(_)), "the bitmap");
     *radiance = Texture::Constant(radiance.mean());
-    let vrl = VrlIntegrator::new(&flat, settings(&flat, PATHS), 1).unwrap();
+    let vrl = VrlIntegrator::exhaustive(&flat, settings(&flat, PATHS), 1).unwrap();
     let (r, mean_z) = against_reference(&render_passes(&flat, &vrl, PASSES, 1, 1), "textured-area");
     println!("textured-area, texture flattened, vrl: {r}; image-mean z = {mean_z:.2}");
     assert!(!passed(&r, mean_z), "the texture replaced by its mean went unnoticed: {r}");

@@ -42,12 +42,17 @@ fn render(
     }
     let lc = Default::default();
     match method {
-        "vrl" => {
-            go(scene, VrlIntegrator::new(scene, ml.clone(), 1).unwrap(), passes, spp_per_pass, 1, sampler)
-        }
+        "vrl" => go(
+            scene,
+            VrlIntegrator::exhaustive(scene, ml.clone(), 1).unwrap(),
+            passes,
+            spp_per_pass,
+            1,
+            sampler,
+        ),
         "vpl" => go(
             scene,
-            VplIntegrator::new(scene, ml.clone(), 2, None).unwrap(),
+            VplIntegrator::exhaustive(scene, ml.clone(), 2).unwrap(),
             passes,
             spp_per_pass,
             2,

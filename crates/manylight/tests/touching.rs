@@ -108,8 +108,8 @@ fn render_with(scene: &Scene, method: &str, spp: u32, paths: u64, seed: u64) -> 
     let lc = Default::default();
     match method {
         "volpath" => render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, spp, seed),
-        "vrl" => render_passes(scene, &VrlIntegrator::new(scene, ml, seed).unwrap(), 48, 1, seed),
-        "vpl" => render_passes(scene, &VplIntegrator::new(scene, ml, seed, None).unwrap(), 48, 1, seed),
+        "vrl" => render_passes(scene, &VrlIntegrator::exhaustive(scene, ml, seed).unwrap(), 48, 1, seed),
+        "vpl" => render_passes(scene, &VplIntegrator::exhaustive(scene, ml, seed).unwrap(), 48, 1, seed),
         "vrl_lightcuts" => {
             render_passes(scene, &LightcutsIntegrator::<Vrls>::new(scene, ml, lc, seed).unwrap(), 48, 1, seed)
         }

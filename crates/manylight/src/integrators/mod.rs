@@ -1,28 +1,31 @@
-//! The many-light integrators `vrl` and `vpl`: each pass traces its own light paths
-//! ([`crate::lighttrace`]), then every camera ray sums emitted light, single scattering by
-//! next-event estimation ([`crate::single`]) and the contributions of all virtual lights of the
-//! pass (`docs/theory.md` §2: `L = emitted + single + sum over virtual lights`, nothing counted twice).
+//! The many-light integrators `vrl`, `vpl`, `vrl_lightcuts` and `vpl_lightcuts`: one
+//! integrator ([`LightcutsIntegrator`]) generic over the light kind, with a cut strategy. Each
+//! pass traces its own light paths ([`crate::lighttrace`]), then every camera ray sums emitted
+//! light, single scattering by next-event estimation ([`crate::single`]) and the contributions
+//! of the virtual lights of the pass, all of them (the exhaustive cut: `vrl`, `vpl`) or a cut
+//! of their tree (`docs/theory.md` §2: `L = emitted + single + sum over virtual lights`,
+//! nothing counted twice).
 
 mod lightcuts;
-mod vpl;
-mod vrl;
 
 pub use lightcuts::{
-    Builder, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass, LightcutSettings,
-    LightcutsIntegrator, Observed, SegmentCut, Vpls, Vrls,
+    Builder, Clamps, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass,
+    LightcutSettings, LightcutsIntegrator, Observed, SegmentCut, TestControls, Vpls, Vrls,
 };
-pub use vpl::VplIntegrator;
-pub use vrl::{TestControls, VrlIntegrator};
+
+/// `vrl` ([`LightcutsIntegrator::exhaustive`]) and `vrl_lightcuts`.
+pub type VrlIntegrator = LightcutsIntegrator<Vrls>;
+/// `vpl` ([`LightcutsIntegrator::exhaustive`]) and `vpl_lightcuts`.
+pub type VplIntegrator = LightcutsIntegrator<Vpls>;
 
 use crate::camera::{estimator_medium, CameraSegment};
 pub use crate::gather::PathTracedMedia;
-use crate::lighttrace::{paths_for_vrl_count, trace_light_paths, LightSet, LightTraceSettings};
+use crate::lighttrace::{paths_for_vrl_count, LightSet, LightTraceSettings};
 use crate::vrl::VrlMedium;
 use haze_core::streams::SURFACE_VPL_INDEX;
 use haze_render::integrators::transmittance_to;
 use haze_scene::lights::EmissionError;
 use haze_scene::{MediumId, Scene};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// How many light paths each pass traces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,22 +140,6 @@ pub(crate) fn surface_vpls(set: &LightSet) -> Vec<crate::vpl::SurfaceVpl> {
     set.surface_vpls.iter().map(|r| r.to_surface_vpl()).collect()
 }
 
-/// The surface VPLs' light at a camera segment (T12c) and at a gathering point (T12d).
-pub(crate) fn surface_vpls_to_segment(
-    scene: &Scene,
-    vpls: &[crate::vpl::SurfaceVpl],
-    cs: &CameraSegment,
-    cam_medium: &VrlMedium,
-    key: u64,
-    clamp: Option<f32>,
-) -> haze_core::Rgb {
-    let mut sum = haze_core::Rgb::ZERO;
-    for (i, vpl) in vpls.iter().enumerate() {
-        sum += surface_vpl_to_segment(scene, vpl, i, cs, cam_medium, key, clamp);
-    }
-    sum
-}
-
 /// Surface VPL `vpl` (index `i` of its pass) -> camera segment (T12c), with its own random
 /// number from `key` (`SURFACE_VPL_INDEX`): the brute-force sum and the lightcut integrators'
 /// power-sampled sum evaluate the same term.
@@ -183,19 +170,6 @@ pub(crate) fn surface_vpl_to_segment(
         clamp,
         |_, x| connect_surface(scene, vpl, x),
     )
-}
-
-pub(crate) fn surface_vpls_to_point(
-    scene: &Scene,
-    vpls: &[crate::vpl::SurfaceVpl],
-    gp: &crate::gather::GatherPoint,
-    clamp: Option<f32>,
-) -> haze_core::Rgb {
-    let mut sum = haze_core::Rgb::ZERO;
-    for vpl in vpls {
-        sum += surface_vpl_to_point(scene, vpl, gp, clamp);
-    }
-    sum
 }
 
 /// Surface VPL `vpl` -> gathering point `gp` (T12d).
@@ -254,51 +228,6 @@ pub(crate) fn light_uniforms(key: u64, light: u32) -> glam::Vec2 {
         haze_core::rng::mix64(key ^ haze_core::rng::mix64(light as u64 ^ haze_core::streams::LIGHT_UNIFORMS));
     let scale = 1.0 / (1u32 << 24) as f32;
     glam::Vec2::new((h >> 40) as f32 * scale, ((h >> 8) & 0xff_ffff) as f32 * scale)
-}
-
-/// Light paths traced and virtual lights made, over the passes so far (for an integrator's
-/// summary line), and the tracing of one pass's light paths.
-#[derive(Debug)]
-pub(crate) struct PassTracer {
-    paths: u64,
-    lights: AtomicU64,
-    passes: AtomicU64,
-}
-
-impl PassTracer {
-    pub(crate) fn new(paths: u64) -> Self {
-        PassTracer { paths, lights: AtomicU64::new(0), passes: AtomicU64::new(0) }
-    }
-
-    pub(crate) fn paths(&self) -> u64 {
-        self.paths
-    }
-
-    /// The light paths of pass `pass`, counting the pass and its `count(set)` lights.
-    pub(crate) fn trace(
-        &self,
-        scene: &Scene,
-        seed: u64,
-        pass: u32,
-        settings: &LightTraceSettings,
-        count: impl Fn(&LightSet) -> usize,
-    ) -> LightSet {
-        let set = trace_light_paths(scene, self.paths, seed, pass, settings)
-            .expect("emitters were checked when the integrator was made");
-        self.lights.fetch_add(count(&set) as u64, Ordering::Relaxed);
-        self.passes.fetch_add(1, Ordering::Relaxed);
-        set
-    }
-
-    /// `"{paths} light paths and {mean} {what} per pass on average ({passes} passes)"`.
-    pub(crate) fn summary(&self, what: &str) -> String {
-        let passes = self.passes.load(Ordering::Relaxed).max(1);
-        format!(
-            "{} light paths and {:.0} {what} per pass on average ({passes} passes)",
-            self.paths,
-            self.lights.load(Ordering::Relaxed) as f64 / passes as f64,
-        )
-    }
 }
 
 /// Splits light records into the two groups of `gather::Gather::segment` (medium-only, after a

@@ -196,8 +196,8 @@ pub fn check_methods_with(
     passes: u32,
     lightcuts: bool,
 ) {
-    let vrl = render_passes(scene, &VrlIntegrator::new(scene, ml.clone(), 1).unwrap(), passes, 1, 1);
-    let vpl = render_passes(scene, &VplIntegrator::new(scene, ml.clone(), 2, None).unwrap(), passes, 1, 2);
+    let vrl = render_passes(scene, &VrlIntegrator::exhaustive(scene, ml.clone(), 1).unwrap(), passes, 1, 1);
+    let vpl = render_passes(scene, &VplIntegrator::exhaustive(scene, ml.clone(), 2).unwrap(), passes, 1, 2);
     let mut methods = vec![("vrl", vrl), ("vpl", vpl)];
     if lightcuts {
         let (vrl_lc, vpl_lc) = lightcut_renders_with(scene, ml, passes, Default::default(), [5, 6]);

@@ -93,7 +93,15 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
         for &l in lights.iter().take(32) {
             for _ in 0..40 {
                 let key = (s.next_1d().to_bits() as u64) << 32 | s.next_1d().to_bits() as u64;
-                let c = K::contribution(scene, &cs, &pass.media, &forest.lights[l as usize], key, l);
+                let c = K::contribution(
+                    scene,
+                    &cs,
+                    &pass.media,
+                    &forest.lights[l as usize],
+                    key,
+                    l,
+                    &Clamps::default(),
+                );
                 let e = c.max_component();
                 assert!(e.is_finite() && c.min_component() >= 0.0, "{c}");
                 samples += 1;

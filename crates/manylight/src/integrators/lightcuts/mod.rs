@@ -1,12 +1,14 @@
-//! `vrl_lightcuts` and `vpl_lightcuts`: one integrator generic over the light kind
-//! ([`ClusterKind`]). Each pass traces its light paths, builds a light tree over the VRLs (or
-//! VPLs) with the three-step parallel builder, and every camera segment estimates the sum over
-//! its lights through a cut of the tree instead of one by one: by default the stochastic,
-//! bound-free cut (`tree::stochastic`), or the paper's deterministic cut by bounds
-//! (`tree::cut`, `--cut bound`).
+//! The many-light integrator, generic over the light kind ([`ClusterKind`]) and the cut
+//! ([`CutStrategy`]): `vrl_lightcuts` and `vpl_lightcuts` with a tree's cut, `vrl` and `vpl`
+//! with the exhaustive cut. Each pass traces its light paths, builds a light tree over the VRLs
+//! (or VPLs) with the three-step parallel builder, and every camera segment estimates the sum
+//! over its lights through a cut of the tree instead of one by one: by default the
+//! stochastic, bound-free cut (`tree::stochastic`), or the paper's deterministic cut by bounds
+//! (`tree::cut`, `--cut bound`). The exhaustive cut builds no tree and evaluates every light,
+//! with the same per-light random numbers (`light_uniforms(key, index)`) as a tree's leaves.
 //!
-//! Component split as in `vrl`/`vpl`: lights that follow a surface bounce live in a tree of
-//! their own, so `multiple` and `surface` stay separate. The camera walk is `vrl`'s
+//! Lights that follow a surface bounce live in a group (and tree) of their own, so `multiple`
+//! and `surface` stay separate. The camera walk is `vrl`'s
 //! (`gather.rs`, the whole image). The surface VPLs get a tree of their own (`surface.rs`), cut
 //! stochastically for camera segments; a gathering surface point picks one of the three trees
 //! and cuts it stochastically with the point's importance, whatever `--cut` says (`surface.rs`,
@@ -16,15 +18,11 @@
 mod bound_tests;
 mod kinds;
 mod observer;
-mod surface;
 
-pub use kinds::{ClusterKind, Vpls, Vrls};
+pub use kinds::{Clamps, ClusterKind, LightKind, SurfaceVpls, Vpls, Vrls};
 pub use observer::{CutObserver, Observed, SegmentCut};
 
-use super::{
-    caustic_tracer, light_uniforms, media, paths_per_pass, surface_vpl_to_point, surface_vpl_to_segment,
-    surface_vpls, ManyLightSettings,
-};
+use super::{caustic_tracer, light_uniforms, media, paths_per_pass, surface_vpls, ManyLightSettings};
 use crate::camera::CameraSegment;
 use crate::gather::{whole_path_radiance, Gather, GatherPoint, PathTracedMedia};
 use crate::lighttrace::trace_light_paths;
@@ -39,7 +37,6 @@ use crate::tree::stochastic::{
     mixed_probability, power, stochastic_cut, SampleNode, SampleTree, StochasticScratch, StochasticSettings,
 };
 use crate::tree::{LightTree, Node};
-use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
 use haze_core::streams::{LIGHT_SAMPLES, POINT_CUT, SEGMENT_CUT, SURFACE_VPL_CUT, TREE_SEEDS};
 use haze_core::{Ray, Rgb, Sampler};
@@ -50,7 +47,6 @@ use std::cell::RefCell;
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-use surface::surface_vpl_summary;
 
 /// Which tree builder to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,6 +66,10 @@ pub enum CutStrategy {
     /// The paper's deterministic cut: refine by upper bounds until `epsilon` or `max_cut`
     /// (`tree::cut`), each node estimated by its representative.
     Bound,
+    /// Every light evaluated, for camera segments and gathering points alike: the brute-force
+    /// sum of `vrl` and `vpl` (`docs/theory.md` §2.1), the reference the cuts estimate. No tree
+    /// is built.
+    Exhaustive,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -110,13 +110,41 @@ struct Stats {
     cut_total: AtomicU64,
     cut_max: AtomicU64,
     hit_max: AtomicU64,
+    /// Camera segment x light evaluations of the exhaustive cut (`haze bench`'s unit of cost).
+    evaluations: AtomicU64,
+}
+
+/// Changes of the estimate that only tests make (`crates/manylight/tests/integrators.rs`): the
+/// negative controls, which must fail, and the unsplit walk the split is compared with.
+/// `TestControls::default()` is the estimator every front end renders with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TestControls {
+    /// Scale of the virtual lights' light at gathering surface points: 1; off (0) must fail the
+    /// whole-image z-test.
+    pub gather_point_scale: f32,
+    /// Scale of the caustic paths' splats (`crate::splat`): 1; 1.2 must fail the comparison
+    /// with the camera continuation.
+    pub caustic_scale: f32,
+    /// `gather::Gather::split`: `Some(1)`; `None` is the unsplit walk.
+    pub split: Option<f32>,
+}
+
+impl Default for TestControls {
+    fn default() -> Self {
+        TestControls { gather_point_scale: 1.0, caustic_scale: 1.0, split: Some(1.0) }
+    }
 }
 
 /// `vrl_lightcuts` (`LightcutsIntegrator<Vrls>`) and `vpl_lightcuts`
-/// (`LightcutsIntegrator<Vpls>`): one integrator, generic over the light kind.
+/// (`LightcutsIntegrator<Vpls>`), and with the exhaustive cut `vrl` and `vpl`
+/// ([`LightcutsIntegrator::exhaustive`]): one integrator, generic over the light kind.
 pub struct LightcutsIntegrator<K: ClusterKind> {
     ml: ManyLightSettings,
     pub settings: LightcutSettings,
+    /// The clamps: the biased ones for `vrl` and `vpl` only (the option table refuses them
+    /// elsewhere), the compensated one from [`ManyLightSettings::compensated_clamp`].
+    pub clamps: Clamps,
+    controls: TestControls,
     paths: u64,
     stats: Stats,
     kind: PhantomData<K>,
@@ -124,7 +152,7 @@ pub struct LightcutsIntegrator<K: ClusterKind> {
 }
 
 /// One tree of lights (medium-only or after a surface bounce).
-pub struct Forest<K: ClusterKind> {
+pub struct Forest<K: LightKind> {
     pub lights: Vec<K::Light>,
     pub tree: LightTree,
     /// Cones of the VRLs' directions per node (`--bound tight` only; empty otherwise).
@@ -132,6 +160,19 @@ pub struct Forest<K: ClusterKind> {
     pub dir_cones: Vec<DirCone>,
     /// The tree laid out for the stochastic cut's descents (`--cut stochastic` only).
     pub sample: SampleTree,
+}
+
+impl<K: LightKind> Forest<K> {
+    /// The lights without a tree (the exhaustive cut needs none).
+    fn without_tree(lights: Vec<K::Light>) -> Self {
+        Forest {
+            lights,
+            tree: LightTree::default(),
+            cones: Vec::new(),
+            dir_cones: Vec::new(),
+            sample: SampleTree::default(),
+        }
+    }
 }
 
 /// What one pass shares between its camera samples: the two trees and the media.
@@ -144,10 +185,9 @@ pub struct LightcutPass<K: ClusterKind> {
     sigma_t_min: Rgb,
     /// The phase every medium shares, if one (for the tight bound's light-side phase).
     light_phase: Option<haze_core::Phase>,
-    surface_vpls: Vec<SurfaceVpl>,
-    /// The surface VPLs' tree (leaves index `surface_vpls`), cut stochastically for camera
-    /// segments and gathering points.
-    surface_tree: SampleTree,
+    /// The surface VPLs, with a tree cut stochastically for camera segments and gathering
+    /// points (none with the exhaustive cut).
+    surface: Forest<SurfaceVpls>,
     /// Mean extinction of the scene's media (the gathering points' importance).
     sigma_mean: f32,
     /// Light tracing's connections of the caustic vertices to the camera.
@@ -163,7 +203,41 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
     ) -> Result<Self, EmissionError> {
         let paths = paths_per_pass(scene, &ml, seed)?;
         let caustics = caustic_tracer(scene, &ml);
-        Ok(LightcutsIntegrator { ml, settings, paths, stats: Stats::default(), kind: PhantomData, caustics })
+        let clamps = Clamps { compensated: ml.compensated_clamp, ..Clamps::default() };
+        Ok(LightcutsIntegrator {
+            ml,
+            settings,
+            clamps,
+            controls: TestControls::default(),
+            paths,
+            stats: Stats::default(),
+            kind: PhantomData,
+            caustics,
+        })
+    }
+
+    /// The brute-force integrator (`vrl`, `vpl`): the exhaustive cut, every light of a pass
+    /// evaluated for every camera segment and gathering point.
+    pub fn exhaustive(scene: &Scene, ml: ManyLightSettings, seed: u64) -> Result<Self, EmissionError> {
+        let settings = LightcutSettings { strategy: CutStrategy::Exhaustive, ..LightcutSettings::default() };
+        Self::new(scene, ml, settings, seed)
+    }
+
+    /// This integrator with the estimate changed as `controls` says (tests only).
+    pub fn with_test_controls(mut self, controls: TestControls) -> Self {
+        self.controls = controls;
+        self
+    }
+
+    /// Light paths traced per pass.
+    pub fn paths_per_pass(&self) -> u64 {
+        self.paths
+    }
+
+    /// Camera segment x light evaluations of the exhaustive cut so far (each with its
+    /// visibility test; 0 for the other cuts).
+    pub fn evaluations(&self) -> u64 {
+        self.stats.evaluations.load(Ordering::Relaxed)
     }
 
     /// The light tree over `summaries` with the configured builder.
@@ -251,7 +325,8 @@ impl<K: ClusterKind> ClusterOracle for Oracle<'_, K> {
         K::bound(&self.bound, self.forest, index)
     }
     fn contribution(&mut self, light: u32) -> Rgb {
-        K::contribution(self.scene, self.cs, self.media, &self.forest.lights[light as usize], self.key, light)
+        let l = &self.forest.lights[light as usize];
+        K::contribution(self.scene, self.cs, self.media, l, self.key, light, &Clamps::default())
     }
 }
 
@@ -259,7 +334,10 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
     type PassData = LightcutPass<K>;
 
     fn name(&self) -> &str {
-        K::NAME
+        match self.settings.strategy {
+            CutStrategy::Exhaustive => K::EXHAUSTIVE_NAME,
+            CutStrategy::Stochastic | CutStrategy::Bound => K::NAME,
+        }
     }
 
     fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
@@ -271,13 +349,20 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
         let tree_seed = haze_core::rng::mix64(seed ^ ((pass as u64) << 32));
         let [a, b] = K::lights(&set);
         let surface_vpls = surface_vpls(&set);
-        let splats =
-            self.caustics.as_ref().map_or_else(CameraSplats::default, |c| c.splats(scene, seed, pass));
+        let splats = self.caustics.as_ref().map_or_else(CameraSplats::default, |c| {
+            c.splats(scene, seed, pass).scaled(self.controls.caustic_scale)
+        });
         let n = a.len() + b.len() + surface_vpls.len();
-        let forests = [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ TREE_SEEDS[0])];
-        let surface_tree = {
-            let summaries: Vec<LightSummary> = surface_vpls.iter().map(surface_vpl_summary).collect();
-            SampleTree::new(&self.build_tree(&summaries, tree_seed ^ TREE_SEEDS[1]))
+        let (forests, surface) = if self.settings.strategy == CutStrategy::Exhaustive {
+            ([a, b].map(Forest::without_tree), Forest::without_tree(surface_vpls))
+        } else {
+            let forests =
+                [self.build(a, &media, tree_seed), self.build(b, &media, tree_seed ^ TREE_SEEDS[0])];
+            let summaries: Vec<LightSummary> =
+                surface_vpls.iter().map(|v| SurfaceVpls::summary(v, &media)).collect();
+            let tree = self.build_tree(&summaries, tree_seed ^ TREE_SEEDS[1]);
+            let sample = SampleTree::new(&tree);
+            (forests, Forest { lights: surface_vpls, tree, cones: Vec::new(), dir_cones: Vec::new(), sample })
         };
         let sigma_mean = if media.is_empty() {
             0.0
@@ -314,8 +399,7 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
             media,
             sigma_t_min,
             light_phase,
-            surface_vpls,
-            surface_tree,
+            surface,
             sigma_mean,
             splats,
         }
@@ -340,6 +424,16 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
     fn summary(&self) -> Option<String> {
         let passes = self.stats.passes.load(Ordering::Relaxed).max(1) as f64;
         let (mean, max, hit) = self.cut_statistics();
+        if self.settings.strategy == CutStrategy::Exhaustive {
+            return Some(format!(
+                "{}: {} light paths and {:.0} {} and surface VPLs per pass on average ({passes} passes){}",
+                self.name(),
+                self.paths,
+                self.lights_per_pass(),
+                K::LIGHTS,
+                if self.clamps == Clamps::default() { "" } else { "; clamped: the image is biased" },
+            ));
+        }
         let cut = match self.settings.strategy {
             CutStrategy::Stochastic => format!(
                 "stochastic cut of {} nodes: mean {mean:.1} per camera segment and tree",
@@ -350,6 +444,7 @@ impl<K: ClusterKind> Integrator for LightcutsIntegrator<K> {
                 100.0 * hit,
                 self.settings.cut.max_cut
             ),
+            CutStrategy::Exhaustive => unreachable!("returned above"),
         };
         Some(format!(
             "{}: {} light paths and {:.0} lights per pass ({} passes); per pass: light tracing {:.3} s, tree build {:.3} s; {cut}",
@@ -450,11 +545,14 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         observer: &impl CutObserver<K>,
     ) -> Rgb {
         let forest = &pass.forests[group];
-        if forest.tree.is_empty() {
+        if forest.lights.is_empty() {
             return Rgb::ZERO;
         }
         let cam_medium = &pass.media[cs.medium as usize];
         let (value, stats) = match self.settings.strategy {
+            CutStrategy::Exhaustive => {
+                return K::contribution_sum(scene, cs, &pass.media, &forest.lights, key, &self.clamps)
+            }
             CutStrategy::Stochastic => STOCHASTIC_SCRATCH.with_borrow_mut(|scratch| {
                 let ctx = ImportanceContext::new(cs.seg, cam_medium);
                 // A leaf's importance from its light's own shape (`ClusterKind::leaf_importance`).
@@ -487,7 +585,8 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
                             } else {
                                 haze_core::rng::mix64(key ^ j.wrapping_mul(LIGHT_SAMPLES))
                             };
-                            sum += K::contribution(scene, cs, &pass.media, l, kj, light) * weight;
+                            let c = K::contribution(scene, cs, &pass.media, l, kj, light, &self.clamps);
+                            sum += c * weight;
                         }
                     },
                 );
@@ -536,26 +635,31 @@ struct LightcutGather<'a, K: ClusterKind, O> {
 
 impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
     fn segment(&self, cs: &CameraSegment, key: u64) -> [Rgb; 2] {
-        let (scene, pass) = (self.scene, self.pass);
-        let cuts = [0, 1].map(|g| self.integrator.segment_cut(scene, pass, cs, key, g, self.observer));
+        let (scene, pass, integrator) = (self.scene, self.pass, self.integrator);
+        let cuts = [0, 1].map(|g| integrator.segment_cut(scene, pass, cs, key, g, self.observer));
         let cam_medium = &pass.media[cs.medium as usize];
+        let (media, clamps) = (&pass.media[..], &integrator.clamps);
+        let surface_vpls = &pass.surface.lights;
+        if integrator.settings.strategy == CutStrategy::Exhaustive {
+            let n = pass.forests.iter().map(|f| f.lights.len()).sum::<usize>() + surface_vpls.len();
+            integrator.stats.evaluations.fetch_add(n as u64, Ordering::Relaxed);
+            let surface = SurfaceVpls::contribution_sum(scene, cs, media, surface_vpls, key, clamps);
+            return [cuts[0], cuts[1] + surface];
+        }
         let ctx = ImportanceContext::new(cs.seg, cam_medium);
-        let surface = self.cut_sum(&pass.surface_tree, &|n| ctx.importance(n), key ^ SURFACE_VPL_CUT, |i| {
-            surface_vpl_to_segment(
-                scene,
-                &pass.surface_vpls[i as usize],
-                i as usize,
-                cs,
-                cam_medium,
-                key,
-                None,
-            )
-        });
+        let surface =
+            self.cut_sum(&pass.surface.sample, &|n| ctx.importance(n), key ^ SURFACE_VPL_CUT, |i| {
+                SurfaceVpls::contribution(scene, cs, media, &surface_vpls[i as usize], key, i, clamps)
+            });
         [cuts[0], cuts[1] + surface]
     }
 
     fn splats_caustics(&self) -> bool {
         self.integrator.caustics.is_some()
+    }
+
+    fn split(&self) -> Option<f32> {
+        self.integrator.controls.split
     }
 
     fn compensated_clamp(&self) -> Option<f32> {
@@ -567,12 +671,39 @@ impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
     }
 
     fn point(&self, gp: &GatherPoint, key: u64) -> Rgb {
+        let scale = self.integrator.controls.gather_point_scale;
+        if self.integrator.settings.strategy == CutStrategy::Exhaustive {
+            return self.point_exhaustive(gp, key) * scale;
+        }
+        self.point_cut(gp, key) * scale
+    }
+}
+
+impl<K: ClusterKind, O> LightcutGather<'_, K, O> {
+    /// Every light's contribution to the gathering point `gp`: the lights of both groups in
+    /// order, each with the numbers of its index among them, then the surface VPLs.
+    fn point_exhaustive(&self, gp: &GatherPoint, key: u64) -> Rgb {
+        let (scene, pass, clamps) = (self.scene, self.pass, &self.integrator.clamps);
+        let mut sum = Rgb::ZERO;
+        for (i, light) in pass.forests.iter().flat_map(|f| &f.lights).enumerate() {
+            sum += K::to_point(scene, gp, &pass.media, light, light_uniforms(key, i as u32).x, clamps);
+        }
+        // Surface VPLs sample nothing at a point: no random number.
+        let mut surface = Rgb::ZERO;
+        for vpl in &pass.surface.lights {
+            surface += SurfaceVpls::to_point(scene, gp, &pass.media, vpl, 0.0, clamps);
+        }
+        sum + surface
+    }
+
+    /// The gathering point's cut: one tree chosen, then cut stochastically.
+    fn point_cut(&self, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass) = (self.scene, self.pass);
         let pi = PointImportance::new(gp.p, gp.n, pass.sigma_mean);
         // One tree per gathering point, picked like a descent's first step over the three
         // roots (importance mixed with the power share), then cut: one light evaluation per
         // point, as many as a segment's single tree.
-        let roots = [&pass.forests[0].sample, &pass.forests[1].sample, &pass.surface_tree];
+        let roots = [&pass.forests[0].sample, &pass.forests[1].sample, &pass.surface.sample];
         let share = self.integrator.settings.stochastic.power_share;
         let (mut imp, mut pow) = ([0.0f32; 3], [0.0f32; 3]);
         for (g, tree) in roots.iter().enumerate() {
@@ -614,18 +745,24 @@ impl<K: ClusterKind, O: CutObserver<K>> Gather for LightcutGather<'_, K, O> {
             };
             self.cut_sum(&forest.sample, &importance, key ^ stream, |i| {
                 let u = light_uniforms(key ^ stream, i).x;
-                K::to_point(scene, gp, &pass.media, &forest.lights[i as usize], u)
+                K::to_point(scene, gp, &pass.media, &forest.lights[i as usize], u, &self.integrator.clamps)
             })
         } else {
-            self.cut_sum(&pass.surface_tree, &|n| pi.importance(n), key ^ stream, |i| {
-                surface_vpl_to_point(scene, &pass.surface_vpls[i as usize], gp, self.compensated_clamp())
+            let surface = &pass.surface.lights;
+            self.cut_sum(&pass.surface.sample, &|n| pi.importance(n), key ^ stream, |i| {
+                SurfaceVpls::to_point(
+                    scene,
+                    gp,
+                    &pass.media,
+                    &surface[i as usize],
+                    0.0,
+                    &self.integrator.clamps,
+                )
             })
         };
         sum * (1.0 / p_tree)
     }
-}
 
-impl<K: ClusterKind, O> LightcutGather<'_, K, O> {
     /// The stochastic cut's estimate (`cut_size` nodes, one light each) of the sum of `eval`
     /// over the lights of `tree`, descending with `importance` and the numbers of `key`.
     fn cut_sum(
