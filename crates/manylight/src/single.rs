@@ -13,7 +13,7 @@
 //! with `E` the intensity (point, spot with falloff) or `L_e cos_y / p_area(y)` (area).
 //!
 //! A spot light's `E` is zero outside its cone, so for a spot the distance is sampled only on the
-//! part of the segment inside the cone ([`spot_interval`]; the cone with half-angle below 90
+//! part of the segment inside the cone ([`Emitter::lit_interval`](haze_scene::emitter::Emitter::lit_interval); the cone with half-angle below 90
 //! degrees is convex, so that part is one interval). The integrand vanishes elsewhere, so the
 //! estimate stays unbiased, and camera segments that miss the beam cost no shadow ray. With the
 //! whole segment as the interval, most samples of a narrow beam (the spot-beam benchmark's cone
@@ -21,12 +21,11 @@
 
 use crate::camera::{estimator_medium, CameraSegment};
 use crate::vrl::sampling::{equiangular_pdf, sample_equiangular};
-use crate::vrl::Segment;
-use glam::{Mat4, Vec2};
+use glam::Vec2;
 use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
 use haze_scene::marched::MarchedDistance;
-use haze_scene::{Emitter, Scene};
+use haze_scene::Scene;
 
 /// One-sample estimate of single scattering along `cs` from all emitters (those at infinity by
 /// [`from_infinity`]). In a heterogeneous medium the
@@ -48,15 +47,7 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
         }
         let Some(light) = scene.sample_emitter_point(i as u32, u_light) else { continue };
         // Where on the segment the light can arrive (module docs).
-        let (a, b) = match &scene.emitters[i] {
-            Emitter::Spot { to_local, cutoff_angle, .. } => {
-                match spot_interval(to_local, *cutoff_angle, &cs.seg) {
-                    Some(ab) => ab,
-                    None => continue,
-                }
-            }
-            _ => (0.0, cs.seg.len),
-        };
+        let Some((a, b)) = scene.emitters[i].lit_interval(cs.seg.o, cs.seg.d, cs.seg.len) else { continue };
         let (u, pdf) = match &hetero {
             None => {
                 // Equiangular parameters of the light point seen from the camera segment.
@@ -186,81 +177,15 @@ fn from_infinity(
     cs.tr_before * cam * sigma_s * tr * es.radiance * (phase / (es.pdf * pdf_u))
 }
 
-/// The interval `[a, b]` of `seg`'s parameter where it is inside the cone of a spot light with
-/// half-angle `cutoff` (apex at the origin of its local frame, axis local `+z`; `to_local` maps
-/// world to local), or `None` if the segment misses the cone. The cone is widened by a relative
-/// 1e-3 so that rounding never cuts off a sliver of the beam (a wider interval costs a little
-/// variance, a narrower one would bias). Cones of 89 degrees and wider: the whole segment.
-///
-/// With `x(t) = o + t d` in the local frame (an affine map keeps `t`), the cone is
-/// `z(t) >= 0` and `z(t)^2 >= cos^2(cutoff) |x(t)|^2`, a quadratic `A t^2 + B t + C >= 0`; the
-/// cone is convex, so its part of the segment is one interval whose ends are among `0`, `s` and
-/// the quadratic's roots.
-pub fn spot_interval(to_local: &Mat4, cutoff: f32, seg: &Segment) -> Option<(f32, f32)> {
-    let s = seg.len;
-    let widened = cutoff * (1.0 + 1e-3) + 1e-4;
-    if widened >= 89f32.to_radians() {
-        return Some((0.0, s));
-    }
-    let o = to_local.transform_point3(seg.o);
-    let d = to_local.transform_vector3(seg.d);
-    let c2 = widened.cos().powi(2);
-    let inside = |t: f32| {
-        let x = o + t * d;
-        // A further relative slack for the roots, which lie on the surface up to rounding.
-        x.z >= 0.0 && x.z * x.z >= c2 * x.length_squared() * (1.0 - 1e-4)
-    };
-    let a = d.z * d.z - c2 * d.length_squared();
-    let b = 2.0 * (o.z * d.z - c2 * o.dot(d));
-    let c = o.z * o.z - c2 * o.length_squared();
-    let mut candidates = [0.0, s, f32::NAN, f32::NAN];
-    if a.abs() > 1e-12 * d.length_squared() {
-        let disc = b * b - 4.0 * a * c;
-        if disc >= 0.0 {
-            // The numerically stable pair of roots.
-            let q = -0.5 * (b + b.signum() * disc.sqrt());
-            candidates[2] = q / a;
-            candidates[3] = if q != 0.0 { c / q } else { f32::NAN };
-        }
-    } else if b != 0.0 {
-        candidates[2] = -c / b;
-    }
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for t in candidates {
-        if t.is_finite() && (0.0..=s).contains(&t) && inside(t) {
-            lo = lo.min(t);
-            hi = hi.max(t);
-        }
-    }
-    (lo < hi).then_some((lo, hi))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::vrl::Segment;
     use glam::Vec3;
+    use haze_scene::Emitter;
     use haze_scene::{load_str, LoadOptions};
     use std::f32::consts::PI;
     use std::path::Path;
-
-    fn random_spot(s: &mut Sampler) -> (Mat4, f32) {
-        let origin = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - 2.0;
-        let target = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 4.0 - 2.0;
-        let up = if (target - origin).normalize().y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
-        // Mitsuba's lookat frame (local +z towards the target), times a uniform scale, which
-        // must not matter.
-        let z = (target - origin).normalize();
-        let x = up.cross(z).normalize();
-        let k = 0.5 + s.next_1d();
-        let to_world = Mat4::from_cols(
-            (k * x).extend(0.0),
-            (k * z.cross(x)).extend(0.0),
-            (k * z).extend(0.0),
-            origin.extend(1.0),
-        );
-        let cutoff = (1.0 + 80.0 * s.next_1d()).to_radians();
-        (to_world, cutoff)
-    }
 
     /// Per channel, the mean of `n` one-sample estimates of [`single_scattering`] along `cs`
     /// (sampler seeded with `seed`) and its standard error.
@@ -278,48 +203,6 @@ mod tests {
             let mean = sum[c] / n as f64;
             (mean, ((sum2[c] / n as f64 - mean * mean) / n as f64).sqrt())
         })
-    }
-
-    /// Every point of a random segment where the spot shines lies in the interval, and the
-    /// interval is no longer than the lit part (up to the widening).
-    #[test]
-    fn spot_interval_covers_the_beam_and_little_else() {
-        let mut s = Sampler::from_seed(11);
-        let mut crossing = 0;
-        for _ in 0..1000 {
-            let (to_world, cutoff) = random_spot(&mut s);
-            let to_local = to_world.inverse();
-            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 6.0 - 3.0;
-            let d = (Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5).normalize();
-            let seg = Segment::new(o, d, 0.5 + 5.0 * s.next_1d());
-            let interval = spot_interval(&to_local, cutoff, &seg);
-            let n = 2000;
-            let mut lit = 0;
-            for k in 0..n {
-                let t = (k as f32 + 0.5) / n as f32 * seg.len;
-                let local = to_local.transform_point3(seg.at(t));
-                if local.length() > 1e-3
-                    && Emitter::spot_falloff(cutoff, 0.5 * cutoff, local.normalize()) > 0.0
-                {
-                    lit += 1;
-                    let (a, b) = interval.unwrap_or_else(|| panic!("lit at {t} but no interval"));
-                    assert!(t >= a && t <= b, "lit at {t} outside [{a}, {b}]");
-                }
-            }
-            if let Some((a, b)) = interval {
-                // The ends lie on the slightly widened cone (the interval is convex's hull).
-                for t in [a, b] {
-                    let local = to_local.transform_point3(seg.at(t));
-                    let angle = (local.z / local.length()).clamp(-1.0, 1.0).acos();
-                    assert!(
-                        local.length() < 1e-4 || angle <= cutoff * 1.01 + 1e-3,
-                        "end {t}: {angle} vs {cutoff}"
-                    );
-                }
-                crossing += (lit > 0) as u32;
-            }
-        }
-        assert!(crossing > 100, "only {crossing} segments cross a beam");
     }
 
     /// Single scattering from a spot light along one segment (isotropic fog, no surfaces)
@@ -373,7 +256,8 @@ mod tests {
                 let tau = med.sigma_t[c] * (u as f32 + dist);
                 (intensity[c] * falloff * med.sigma_s[c] * (-tau).exp() / (4.0 * PI * dist * dist)) as f64
             };
-            let (a, b) = spot_interval(&to_local, cutoff_angle, &seg).unwrap_or((0.0, 0.0));
+            let (a, b) = haze_scene::emitter::cone_interval(&to_local, cutoff_angle, seg.o, seg.d, seg.len)
+                .unwrap_or((0.0, 0.0));
             let exact: [f64; 3] = std::array::from_fn(|c| {
                 if b > a {
                     haze_testkit::quadrature::integrate(|u| integrand(u, c), a as f64, b as f64, &[], 1e-5)
