@@ -325,50 +325,54 @@ def reference(scene: Path):
 
 
 # argv: scene, spp (0: load only), NAME=VALUE defines. Tries the variants in turn (polarised
-# plugins need a polarized variant, `direct_projective` an AD one); prints `loaded VARIANT`, then
-# `mean X` (scalar_rgb only), or `error MESSAGE` (scalar_rgb's).
+# plugins need a polarized variant, `direct_projective` and `prb` an AD one) and prints, each on a
+# line of its own (Mitsuba's log shares stdout): `@@try VARIANT`, then `@@error VARIANT MESSAGE` or
+# `@@loaded VARIANT`, then `@@mean X` (scalar_rgb only).
 MITSUBA = """
 import sys, mitsuba as mi, numpy as np
 defines = dict(a.split("=", 1) for a in sys.argv[3:])
-first = None
 for variant in ["scalar_rgb", "scalar_spectral_polarized", "llvm_ad_rgb"]:
+    print("\\n@@try", variant, flush=True)
     try:
         mi.set_variant(variant)
         scene = mi.load_file(sys.argv[1], **defines)
         break
     except Exception as e:
-        first = first or " ".join(str(e).split())[-300:]
+        print("\\n@@error", variant, " ".join(str(e).split())[-200:], flush=True)
 else:
-    print("error", first)
     sys.exit(0)
-print("loaded", variant, flush=True)
+print("\\n@@loaded", variant, flush=True)
 if int(sys.argv[2]) > 0 and variant == "scalar_rgb":
     img = np.asarray(mi.render(scene, spp=int(sys.argv[2])))
-    print("mean", float(img[..., :3].mean()))
+    print("\\n@@mean", float(img[..., :3].mean()), flush=True)
 """
 
 
 def mitsuba(python: str, scene: Path, spp: int, defines, timeout: float):
-    """(variant that loads or None, scalar_rgb's error, image mean) of Mitsuba 3 on `scene`; the
-    mean only with spp > 0 and scalar_rgb, None if the render fails or times out. Only the
-    defines the scene file uses are passed: Mitsuba 3 refuses unused parameters."""
+    """(variant that loads or None, the variants' errors, image mean) of Mitsuba 3 on `scene`;
+    the mean only with spp > 0 and scalar_rgb, None if the render fails or times out. Only the
+    defines the scene file uses are passed: Mitsuba 3 refuses unused parameters. A variant whose
+    process dies (llvm_ad_rgb with some system LLVMs) counts as not loading."""
     text = scene.read_text(errors="replace") if scene.exists() else ""
     defines = [d for d in defines if "$" + d.split("=", 1)[0] in text]
+    died = ""
     try:
         p = subprocess.run([python, "-c", MITSUBA, scene.name, str(spp), *defines], cwd=scene.parent,
                            capture_output=True, text=True, timeout=timeout)
-        out, stderr = p.stdout, p.stderr
+        out = p.stdout
+        if p.returncode != 0:
+            died = f"exit {p.returncode}"
     except subprocess.TimeoutExpired as e:
-        out = e.stdout.decode() if isinstance(e.stdout, bytes) else (e.stdout or "")
-        stderr = ""
-        if "loaded" not in out:
-            return None, f"timed out after {timeout:.0f} s", None
-    m = re.search(r"^loaded (\S+)$", out, re.M)
+        out = e.stdout.decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
+        died = f"timed out after {timeout:.0f} s"
+    m = re.search(r"^@@loaded (\S+)$", out, re.M)
     variant = m.group(1) if m else None
-    m = re.search(r"^error (.*)$", out, re.M)
-    err = m.group(1) if m else ("" if variant else (stderr.strip().splitlines() or ["?"])[-1])
-    m = re.search(r"^mean (\S+)$", out, re.M)
-    return variant, err, float(m.group(1)) if m else None
+    errs = [f"{v}: {msg}" for v, msg in re.findall(r"^@@error (\S+) (.*)$", out, re.M)]
+    tried = re.findall(r"^@@try (\S+)$", out, re.M)
+    if died and tried and not variant and not any(e.startswith(tried[-1] + ":") for e in errs):
+        errs.append(f"{tried[-1]}: {died}")
+    m = re.search(r"^@@mean (\S+)$", out, re.M)
+    return variant, "" if variant else "; ".join(errs) or died or "?", float(m.group(1)) if m else None
 
 
 def first_error(stderr: str) -> str:
