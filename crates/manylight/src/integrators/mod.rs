@@ -8,9 +8,11 @@
 
 mod lightcuts;
 
+#[cfg(feature = "test-controls")]
+pub use lightcuts::TestControls;
 pub use lightcuts::{
     Builder, Clamps, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass,
-    LightcutSettings, LightcutsIntegrator, Observed, SegmentCut, TestControls, Vpls, Vrls,
+    LightcutSettings, LightcutsIntegrator, Observed, SegmentCut, Vpls, Vrls,
 };
 
 /// `vrl` ([`LightcutsIntegrator::exhaustive`]) and `vrl_lightcuts`.

@@ -116,7 +116,8 @@ struct Stats {
 
 /// Changes of the estimate that only tests make (`crates/manylight/tests/integrators.rs`): the
 /// negative controls, which must fail, and the unsplit walk the split is compared with.
-/// `TestControls::default()` is the estimator every front end renders with.
+/// `TestControls::default()` is the estimator; other values can be set only with the feature
+/// `test-controls`, which only this crate's tests turn on.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TestControls {
     /// Scale of the virtual lights' light at gathering surface points: 1; off (0) must fail the
@@ -223,7 +224,9 @@ impl<K: ClusterKind> LightcutsIntegrator<K> {
         Self::new(scene, ml, settings, seed)
     }
 
-    /// This integrator with the estimate changed as `controls` says (tests only).
+    /// This integrator with the estimate changed as `controls` says (this crate's tests only:
+    /// feature `test-controls`).
+    #[cfg(feature = "test-controls")]
     pub fn with_test_controls(mut self, controls: TestControls) -> Self {
         self.controls = controls;
         self
