@@ -154,9 +154,7 @@ impl Emitter {
             _ => None,
         }
     }
-}
 
-impl Emitter {
     /// The interval `[a, b]` of the segment `o + t d`, `t` in `[0, len]`, outside which the
     /// emitter sends no light to it: a spot light's cone ([`cone_interval`]), the whole segment
     /// for the other emitters; `None` if a spot light's cone misses the segment. Single

@@ -60,11 +60,7 @@ pub trait LightKind: Sized + Send + Sync + 'static {
         key: u64,
         clamps: &Clamps,
     ) -> Rgb {
-        let mut sum = Rgb::ZERO;
-        for (i, light) in lights.iter().enumerate() {
-            sum += Self::contribution(scene, cs, media, light, key, i as u32, clamps);
-        }
-        sum
+        each_contribution::<Self>(scene, cs, media, lights, key, clamps)
     }
     /// One sampled contribution of `light` to the gathering surface point `gp` (unbiased
     /// unless `clamps` clamps its `1/d^2`; `docs/theory.md` §5.1, §5.3).
@@ -76,6 +72,23 @@ pub trait LightKind: Sized + Send + Sync + 'static {
         u: f32,
         clamps: &Clamps,
     ) -> Rgb;
+}
+
+/// `sum_i K::contribution(.., lights[i], key, i, ..)`, one light after the other: the exhaustive
+/// cut's sum as [`LightKind::contribution_sum`] defines it.
+fn each_contribution<K: LightKind>(
+    scene: &Scene,
+    cs: &CameraSegment,
+    media: &[VrlMedium],
+    lights: &[K::Light],
+    key: u64,
+    clamps: &Clamps,
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    for (i, light) in lights.iter().enumerate() {
+        sum += K::contribution(scene, cs, media, light, key, i as u32, clamps);
+    }
+    sum
 }
 
 /// A kind of medium light that a many-light integrator is made for: with a tree's cut
@@ -183,11 +196,7 @@ impl LightKind for Vrls {
         /// Lights sampled back to back before their contributions are evaluated.
         const CHUNK: usize = 16;
         if crate::hetero::any(scene) {
-            let mut sum = Rgb::ZERO;
-            for (i, vrl) in lights.iter().enumerate() {
-                sum += Self::contribution(scene, cs, media, vrl, key, i as u32, clamps);
-            }
-            return sum;
+            return each_contribution::<Self>(scene, cs, media, lights, key, clamps);
         }
         let (cam, cam_medium) = (&cs.seg, &media[cs.medium as usize]);
         let mut sum = Rgb::ZERO;

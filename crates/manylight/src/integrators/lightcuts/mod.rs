@@ -8,11 +8,11 @@
 //! with the same per-light random numbers (`light_uniforms(key, index)`) as a tree's leaves.
 //!
 //! Lights that follow a surface bounce live in a group (and tree) of their own, so `multiple`
-//! and `surface` stay separate. The camera walk is `vrl`'s
-//! (`gather.rs`, the whole image). The surface VPLs get a tree of their own (`surface.rs`), cut
-//! stochastically for camera segments; a gathering surface point picks one of the three trees
-//! and cuts it stochastically with the point's importance, whatever `--cut` says (`surface.rs`,
-//! docs/lightcuts.md "The whole image").
+//! and `surface` stay separate. Every method's camera walk is the same (`gather.rs`, the whole
+//! image). The surface VPLs ([`SurfaceVpls`]) get a tree of their own, cut stochastically for
+//! camera segments; a gathering surface point picks one of the three trees and cuts it
+//! stochastically with the point's importance, whatever `--cut` says (docs/lightcuts.md "The
+//! whole image").
 
 #[cfg(test)]
 mod bound_tests;
