@@ -1,6 +1,7 @@
-//! The rules every path walker shares: `volpath` (`haze-render`), the camera walk
-//! (`haze-manylight`'s `gather.rs`), light tracing (`lighttrace.rs`) and the caustic paths
-//! (`splat.rs`). Each walker keeps its own loop; what ends a path is decided here, once.
+//! Russian roulette, the rule every path walker applies (through `haze_render::walker`,
+//! `Walker::roulette`): `volpath`, the many-light camera walk, light tracing and the caustic
+//! paths. The walker, with its cap on a walk's vertices, lives in `haze-render`; the rule lives
+//! here, below every crate that samples.
 //!
 //! Russian roulette (Arvo & Kirk 1990; pbrt-v4 Section 14.1.6): past the walker's roulette
 //! depth a path survives with probability `q = min(m, MAX_SURVIVAL)`, where `m` is the largest
@@ -22,19 +23,6 @@ pub fn roulette(m: f32, u: f32) -> Option<f32> {
     let q = m.min(MAX_SURVIVAL);
     (u < q).then_some(q)
 }
-
-/// Most surface and medium vertices a camera chain (`gather.rs`) or a caustic path (`splat.rs`)
-/// visits between two of its own decisions. Null boundaries and delta surfaces do not count as
-/// roulette events before the roulette depth, so a ray caught between coincident null surfaces
-/// by rounding could otherwise loop for ever; no physical path in a scene of ours comes near it
-/// (roulette ends a path after about 20 events past the roulette depth on average), so the cap
-/// changes no image.
-pub const MAX_CHAIN_VERTICES: usize = 10_000;
-
-/// Most vertices of one light path (`lighttrace.rs`): ten times [`MAX_CHAIN_VERTICES`], since a
-/// light path may be unlimited (`max_depth -1`) and carries all its scattering events in one
-/// loop; the same safety net against rounding loops, never reached by a physical path.
-pub const MAX_LIGHT_PATH_VERTICES: usize = 100_000;
 
 #[cfg(test)]
 mod tests {

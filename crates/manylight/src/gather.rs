@@ -9,15 +9,19 @@
 //! estimation on gathering segments (`single.rs`) and at gathering points
 //! (`haze_render::integrators::surface_nee`, MIS-weighted against the continuation's BSDF
 //! sample, `Walk::mis_from`), and the caller's virtual-light sums.
+//!
+//! Between vertices a chain moves through the one path walker (`haze_render::walker::Walker`):
+//! legs through the medium (`trace_leg`, then the leg's transmittance), null crossings,
+//! bounces, roulette and the cap on a walk's vertices.
 
 use crate::camera::{CameraSegment, MAX_SEGMENTS};
 use crate::vrl::Segment;
 use glam::Vec3;
-use haze_core::ray::offset_origin;
 use haze_core::transmittance::hero_channel;
 use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_render::integrators::{area_hit_weight, environment_hits, surface_nee, HandOff, PathState, VolPath};
+use haze_render::walker::Walker;
 use haze_render::{Component, PathRadiance};
 use haze_scene::bsdf::BsdfSample;
 use haze_scene::texture::TexPoint;
@@ -133,8 +137,8 @@ struct ChainSegment {
 /// The state of a camera walk between chains.
 #[derive(Clone, Copy)]
 struct Walk {
-    ray: Ray,
-    medium: Option<MediumId>,
+    /// Where the chain goes (its ray and medium), through the one path walker.
+    walker: Walker,
     beta: Rgb,
     surface_seen: bool,
     gathering: bool,
@@ -159,9 +163,6 @@ struct Walk {
     /// radiance leaving `y` estimated by a camera walk from `y`, estimates without the VPLs'
     /// singularity.
     compensate_from: Option<Vec3>,
-    /// The ray is the camera's (not yet queried): the scene answers it from its camera grid
-    /// (`Scene::intersect_camera`, the tree's answer).
-    camera_ray: bool,
     /// The chain continues from the gathering point or rough interface `x` by a non-delta BSDF
     /// sample of effective density `p` (`p_bsdf / k` from a gathering point, one of `k`
     /// gathering vertices chosen; `p_bsdf` from a rough interface), and only null boundaries and
@@ -199,8 +200,7 @@ pub(crate) fn whole_path_radiance(
 ) -> PathRadiance {
     let mut out = PathRadiance::default();
     let start = Walk {
-        ray,
-        medium,
+        walker: Walker::camera(ray, medium),
         beta: Rgb::ONE,
         surface_seen: false,
         gathering: true,
@@ -209,7 +209,6 @@ pub(crate) fn whole_path_radiance(
         skip_area_emitters: false,
         may_split: gather.split(),
         compensate_from: None,
-        camera_ray: true,
         mis_from: None,
     };
     CHAIN.with_borrow_mut(|chain| {
@@ -295,12 +294,12 @@ fn walk(
         if let Some(h) = &hit {
             let shape = &scene.shapes[h.shape as usize];
             let frame = scene.shading_frame(h);
-            let wi = frame.to_local(-st.ray.d);
+            let wi = frame.to_local(-st.walker.ray.d);
             // Next-event estimation here makes paths of `c + 1` events (crate::depth); whenever
             // it may, so may the continuation's BSDF sample from here (`st.events + 1 <
             // max_events`), its MIS partner (`Walk::mis_from`), chosen with probability `1/k`.
             let nee = if st.events < max_light_path {
-                surface_nee(scene, sampler, h, &frame, wi, st.medium, 1.0 / candidates as f32)
+                surface_nee(scene, sampler, h, &frame, wi, st.walker.medium, 1.0 / candidates as f32)
             } else {
                 Rgb::ZERO
             };
@@ -347,8 +346,8 @@ fn walk(
             };
             st.surface_seen = c.after_surface;
             let (d, _) = med.phase.sample(cs.seg.d, u2);
-            st.ray = Ray::new(cs.seg.at(u), d);
-            st.medium = Some(cs.medium);
+            st.walker.medium = Some(cs.medium);
+            st.walker.scatter(cs.seg.at(u), d);
         } else {
             st.skip_area_emitters = seen_directly && gather.splats_caustics();
             st.events += 1;
@@ -370,9 +369,7 @@ fn walk(
                 delta_lobe = true;
                 st.skip_area_emitters = false;
             }
-            let d = frame.to_world(bs.wo);
-            st.medium = scene.medium_towards(&h, d, st.medium);
-            st.ray = Ray::new(offset_origin(h.p, h.n, d), d);
+            st.walker.bounce(scene, &h, frame.to_world(bs.wo));
         }
         chain.clear();
         st.gathering = delta_lobe;
@@ -387,10 +384,10 @@ fn walk(
 
 /// The walk after the delta sample `bs` at `h` (frame `frame`) of the state `st`.
 fn after_delta(st: &Walk, h: &SurfaceInteraction, frame: &Frame, bs: &BsdfSample, scene: &Scene) -> Walk {
-    let d = frame.to_world(bs.wo);
+    let mut walker = st.walker;
+    walker.bounce(scene, h, frame.to_world(bs.wo));
     Walk {
-        ray: Ray::new(offset_origin(h.p, h.n, d), d),
-        medium: scene.medium_towards(h, d, st.medium),
+        walker,
         beta: st.beta * bs.weight,
         events: st.events + !bs.null as u32,
         surface_seen: true,
@@ -422,47 +419,43 @@ fn walk_chain(
     if st.events >= max_events {
         return ChainEnd::Stop;
     }
-    for _ in 0..haze_core::walk::MAX_CHAIN_VERTICES {
+    while st.walker.next_vertex() {
         // Before the intersection, which volpath's walk makes itself (a heterogeneous medium's
         // grid beyond the surface, or missed, only means that volpath's walk passes it).
-        if st.gathering && st.medium.is_some_and(|m| gather.path_traced_media().covers(scene.medium(m))) {
+        if st.gathering
+            && st.walker.medium.is_some_and(|m| gather.path_traced_media().covers(scene.medium(m)))
+        {
             hand_off(scene, st, gather, sampler, out);
             return ChainEnd::Stop;
         }
-        let hit = if std::mem::take(&mut st.camera_ray) {
-            scene.intersect_camera(&st.ray).map(|h| scene.interaction(&h))
-        } else {
-            scene.intersect(&st.ray)
-        };
-        let len = hit.map_or(st.ray.t_max, |h| h.t);
-        if let Some(m) = st.medium {
-            let segment = |seg: Segment| ChainSegment {
-                cs: CameraSegment { seg, medium: m, tr_before: st.beta, events: st.events },
-                after_surface: st.surface_seen,
-                direct: st.direct,
-                gathered: false,
-                scale: 1.0,
-            };
-            match &scene.medium(m).kind {
-                MediumKind::Homogeneous(c) => {
-                    if st.gathering && len.is_finite() && len > 0.0 && chain.len() < MAX_SEGMENTS {
-                        chain.push(segment(Segment::new(st.ray.o, st.ray.d, len)));
-                    }
-                    st.beta *= transmittance(c.sigma_t, len);
-                }
-                MediumKind::Grid(h) => {
-                    // The gathering segment is the part where the majorant is positive (the
-                    // medium is empty elsewhere, T27, T28, so the throughput there is `beta`); the walk
-                    // goes on with a ratio-tracking estimate of the interval's transmittance
-                    // (T30), independent of the estimates on the segment (docs/theory.md §12.5).
-                    if st.gathering && chain.len() < MAX_SEGMENTS {
-                        if let Some((a, b)) = h.clip(st.ray.o, st.ray.d, 0.0, len) {
-                            chain.push(segment(Segment::new(st.ray.at(a), st.ray.d, b - a)));
-                        }
-                    }
-                    st.beta *= h.transmittance(st.ray.o, st.ray.d, 0.0, len, sampler);
+        let leg = st.walker.trace_leg(scene);
+        let hit = leg.hit.map(|h| scene.interaction(&h));
+        let (ray, len) = (st.walker.ray, leg.t_surface);
+        if let Some(m) = st.walker.medium {
+            // The gathering segment is where the medium may interact (`Medium::support`: a grid
+            // medium is empty outside its positive-majorant cells, T27, T28, so the throughput
+            // there is `beta`); the walk goes on with the interval's transmittance (closed form,
+            // or a ratio-tracking estimate (T30) independent of the estimates on the segment,
+            // docs/theory.md §12.5).
+            if st.gathering && chain.len() < MAX_SEGMENTS {
+                if let Some((a, b)) =
+                    scene.medium(m).support(ray.o, ray.d, 0.0, len).filter(|s| s.1.is_finite())
+                {
+                    chain.push(ChainSegment {
+                        cs: CameraSegment {
+                            seg: Segment::new(ray.at(a), ray.d, b - a),
+                            medium: m,
+                            tr_before: st.beta,
+                            events: st.events,
+                        },
+                        after_surface: st.surface_seen,
+                        direct: st.direct,
+                        gathered: false,
+                        scale: 1.0,
+                    });
                 }
             }
+            st.beta *= st.walker.transmittance(scene, len, sampler);
         }
         let emitted = if st.surface_seen { Component::Surface } else { Component::Emitted };
         // `hide_emitters` hides what the camera sees at no event, as volpath's `depth == 0`.
@@ -470,10 +463,10 @@ fn walk_chain(
         let Some(h) = hit else {
             match st.mis_from {
                 None if st.gathering && !hidden => {
-                    out.add(emitted, st.beta * scene.environment_radiance(st.ray.d));
+                    out.add(emitted, st.beta * scene.environment_radiance(st.walker.ray.d));
                 }
                 Some((_, p_bsdf)) => {
-                    for (le, w) in environment_hits(scene, st.ray.d, p_bsdf) {
+                    for (le, w) in environment_hits(scene, st.walker.ray.d, p_bsdf) {
                         out.add(emitted, st.beta * le * w);
                     }
                 }
@@ -484,7 +477,7 @@ fn walk_chain(
         // Emitters met after a non-delta sample's null crossings only are weighed against the
         // next-event estimation at the sample's vertex; the others count fully while gathering
         // (no other strategy finds them), except under `skip_area_emitters`.
-        if let Some((e, le)) = scene.area_radiance(h.shape, h.n, h.tex(), -st.ray.d) {
+        if let Some((e, le)) = scene.area_radiance(h.shape, h.n, h.tex(), -st.walker.ray.d) {
             match st.mis_from {
                 None if st.gathering && !st.skip_area_emitters && !hidden => out.add(emitted, st.beta * le),
                 Some((x, p_bsdf)) => {
@@ -495,7 +488,7 @@ fn walk_chain(
             }
         }
         let shape = &scene.shapes[h.shape as usize];
-        if scene.cross_if_null(&h, &mut st.ray, &mut st.medium) {
+        if st.walker.cross_if_null(scene, &h) {
             continue;
         }
         if shape.bsdf.is_black() || st.beta.is_black() {
@@ -513,11 +506,11 @@ fn walk_chain(
             // or textured roughness follows `dp/du`, which a frame built from the normal alone
             // ignores (`Scene::shading_frame`).
             let frame = scene.shading_frame(&h);
-            let wi = frame.to_local(-st.ray.d);
+            let wi = frame.to_local(-st.walker.ray.d);
             // Weighed against the BSDF sample below, taken whenever this estimate is (both need
             // `st.events + 1 < max_events`).
             if st.events < max_light_path {
-                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.medium, 1.0);
+                let nee = surface_nee(scene, sampler, &h, &frame, wi, st.walker.medium, 1.0);
                 out.add(Component::Surface, st.beta * nee);
             }
             if st.events + 1 >= max_events {
@@ -545,7 +538,7 @@ fn walk_chain(
             return ChainEnd::Stop;
         }
         let frame = scene.shading_frame(&h);
-        let wi = frame.to_local(-st.ray.d);
+        let wi = frame.to_local(-st.walker.ray.d);
         let (u1, u2) = (sampler.next_1d(), sampler.next_2d());
         if let Some(factor) = st.may_split {
             // The two lobes of a two-lobe delta BSDF: `u1` below and above every lobe
@@ -592,31 +585,31 @@ fn hand_off(scene: &Scene, st: &Walk, gather: &impl Gather, sampler: &mut Sample
     let volpath = VolPath::from_spec(&scene.integrator);
     let hero = hero_channel(sampler.next_1d());
     let path = PathState {
+        walker: st.walker,
         beta: st.beta,
         depth: st.events,
         // Before a surface event every event was a medium event (`Component::classify`).
         medium_events: st.events,
         surface_events: st.surface_seen as u32,
-        first_query: st.camera_ray,
         specular_chain: st.mis_from.is_none(),
-        last_p: st.mis_from.map_or(st.ray.o, |(x, _)| x),
+        last_p: st.mis_from.map_or(st.walker.ray.o, |(x, _)| x),
         last_pdf: st.mis_from.map_or(1.0, |(_, p)| p),
         hand_off: HandOff {
             skip_area: st.skip_area_emitters,
             direct: st.direct && gather.splats_caustics(),
             pending: false,
         },
-        ..PathState::camera(st.ray, st.medium, hero)
+        ..PathState::camera(st.walker.ray, st.walker.medium, hero)
     };
     volpath.trace(scene, path, sampler, out);
 }
 
 /// Russian roulette after [`RR_EVENTS`] events: the walk survives with probability
-/// `q = min(max(beta), 0.95)` and its throughput is divided by `q` (`haze_core::walk`); false if
+/// `q = min(max(beta), 0.95)` and its throughput is divided by `q` (`Walker::roulette`); false if
 /// it ends.
 fn survives_roulette(st: &mut Walk, sampler: &mut Sampler) -> bool {
     if st.events > RR_EVENTS {
-        let Some(q) = haze_core::walk::roulette(st.beta.max_component(), sampler.next_1d()) else {
+        let Some(q) = Walker::roulette(st.beta.max_component(), sampler) else {
             return false;
         };
         st.beta /= q;

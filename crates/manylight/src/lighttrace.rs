@@ -31,6 +31,10 @@
 //! tracking along the VRL (`crate::hetero`). Its point at `v` exists with probability 1, so no
 //! pdf of the free flight enters, and the vertex delta tracking samples only continues the path.
 //!
+//! Between vertices a light path moves through the one path walker
+//! (`haze_render::walker::Walker`: the leg's free flight, null crossings, bounces, roulette and
+//! the cap on a walk's vertices); this file keeps what it records at each vertex.
+//!
 //! Dielectric interfaces are crossed with the adjoint BSDF: light tracing transports importance,
 //! so the `1/eta^2` radiance compression of refraction is not applied (Veach 1997, Sec. 5.2).
 
@@ -39,6 +43,7 @@ use haze_core::ray::offset_origin;
 use haze_core::streams::{LIGHT_PILOT, LIGHT_STREAM};
 use haze_core::transmittance::hero_channel;
 use haze_core::{Ray, Rgb, Sampler};
+use haze_render::walker::Walker;
 use haze_scene::lights::{EmissionError, EmissionSample};
 use haze_scene::Flight;
 use haze_scene::{MediumId, MediumKind, Scene};
@@ -288,7 +293,8 @@ fn trace_one(
 ) {
     let Some(e) = scene.sample_emission(s.next_1d(), s.next_2d(), s.next_2d()) else { return };
     let power = e.weight * inv_paths;
-    let (mut ray, mut medium) = emission_ray(scene, &e);
+    let (ray, medium) = emission_ray(scene, &e);
+    let mut walker = Walker::new(ray, medium);
     let hero = hero_channel(s.next_1d());
     // Relative throughput (starts at 1) and pdf ratios; the flux is power * t.
     let mut t = Rgb::ONE;
@@ -297,20 +303,15 @@ fn trace_one(
     let mut after_surface = false;
     let max_len = scene_extent(scene) * 4.0;
 
-    for _ in 0..haze_core::walk::MAX_LIGHT_PATH_VERTICES {
-        // A homogeneous medium draws its flight's distance first (the same random number as
-        // always), and the surface query stops there: a flight that ends sooner needs no surface
-        // (volpath's order).
-        let flight = medium.map(|m| scene.medium(m).begin_flight(hero, s));
-        let query = match flight {
-            Some(start) => Ray { t_max: start.query_limit(ray.t_max), ..ray },
-            None => ray,
-        };
-        let hit = scene.intersect(&query);
-        let t_surface = hit.map_or(f32::INFINITY, |h| h.t);
-        if let (Some(m), Some(start)) = (medium, flight) {
+    while walker.next_vertex() {
+        // The leg's free flight (`Walker::sample_leg`: in a homogeneous medium the distance
+        // first, and the surface query stops there, volpath's order).
+        let medium = walker.medium;
+        let (leg, flight) = walker.sample_leg(scene, hero, s, |_| {});
+        let ray = walker.ray;
+        let t_surface = leg.t_surface;
+        if let (Some(m), Some(flight)) = (medium, flight) {
             let med = scene.medium(m);
-            let flight = med.end_flight(start, ray.o, ray.d, t_surface, hero, s);
             match &med.kind {
                 // Heterogeneous (module docs): one VRL over the whole segment where the medium
                 // is (`clip`), carrying `T(0, v)` along itself; delta tracking gave the next
@@ -356,7 +357,7 @@ fn trace_one(
                     t *= weight * sigma_s;
                     r *= ratio;
                     let at = Vertex { m, after_surface, power, phase: &med.phase };
-                    if !scatter(&at, ray.at(dist), &mut ray, &mut t, r, &mut events, s, settings, out) {
+                    if !scatter(&at, ray.at(dist), &mut walker, &mut t, r, &mut events, s, settings, out) {
                         return;
                     }
                     continue;
@@ -367,9 +368,9 @@ fn trace_one(
                 }
             }
         }
-        let Some(h) = hit else { return };
+        let Some(h) = leg.hit.map(|h| scene.interaction(&h)) else { return };
         let shape = &scene.shapes[h.shape as usize];
-        if scene.cross_if_null(&h, &mut ray, &mut medium) {
+        if walker.cross_if_null(scene, &h) {
             continue;
         }
         if shape.bsdf.is_black() {
@@ -395,7 +396,6 @@ fn trace_one(
         // Adjoint transport: undo the radiance-only 1/eta^2 factor of refraction.
         t *= bs.weight * (bs.eta * bs.eta);
         let d = frame.to_world(bs.wo);
-        medium = scene.medium_towards(&h, d, medium);
         after_surface = true;
         // A thin sheet's straight transmission (`null` sample) is no event (crate::depth).
         if !bs.null {
@@ -404,7 +404,7 @@ fn trace_one(
                 return;
             }
         }
-        ray = Ray::new(offset_origin(h.p, h.n, d), d);
+        walker.bounce(scene, &h, d);
     }
 }
 
@@ -423,7 +423,7 @@ struct Vertex<'a> {
 fn scatter(
     at: &Vertex,
     p: Vec3,
-    ray: &mut Ray,
+    walker: &mut Walker,
     t: &mut Rgb,
     r: Rgb,
     events: &mut u32,
@@ -433,7 +433,7 @@ fn scatter(
 ) -> bool {
     out.vpls.push(VplRecord {
         p,
-        d_in: ray.d,
+        d_in: walker.ray.d,
         flux: at.power * *t / r.mean(),
         medium: at.m,
         after_surface: at.after_surface,
@@ -443,12 +443,12 @@ fn scatter(
     if *events > settings.max_events || !survives_roulette(s, t, r, *events, settings) {
         return false;
     }
-    let (d, _) = at.phase.sample(ray.d, s.next_2d());
-    *ray = Ray::new(p, d);
+    let (d, _) = at.phase.sample(walker.ray.d, s.next_2d());
+    walker.scatter(p, d);
     true
 }
 
-/// Russian roulette (`haze_core::walk`) on the relative throughput `t / mean(r)` once
+/// Russian roulette (`Walker::roulette`) on the relative throughput `t / mean(r)` once
 /// `events > rr_events`.
 fn survives_roulette(
     s: &mut Sampler,
@@ -460,7 +460,7 @@ fn survives_roulette(
     if events <= settings.rr_events {
         return true;
     }
-    let Some(q) = haze_core::walk::roulette((*t / r.mean()).max_component(), s.next_1d()) else {
+    let Some(q) = Walker::roulette((*t / r.mean()).max_component(), s) else {
         return false;
     };
     *t /= q;

@@ -4,7 +4,8 @@
 //! can scatter towards it: each medium segment after the first direction-changing delta
 //! vertex (single scattering, one point per segment) and the first non-delta surface point.
 //! The splats go into the pixels around their image (`docs/theory.md` §2.1, row "caustics
-//! seen directly").
+//! seen directly"). A caustic path moves between vertices through the one path walker
+//! (`haze_render::walker::Walker`: legs through the medium, null crossings, bounces, the cap).
 //!
 //! Without it those paths (`emitter D+ x camera`, `x` a medium point or a surface point the
 //! camera sees directly) are found only by the camera path's continuation from `x` hitting the
@@ -58,12 +59,12 @@
 
 use crate::vpl::SurfaceVpl;
 use glam::{Vec2, Vec3};
-use haze_core::ray::offset_origin;
 use haze_core::sampling::{sample_uniform_cone, sample_uniform_sphere};
 use haze_core::streams::CAUSTIC_PATHS;
 use haze_core::transmittance::transmittance;
-use haze_core::{Frame, Ray, Rgb, Sampler, PI};
+use haze_core::{Frame, Rgb, Sampler, PI};
 use haze_render::integrators::transmittance_to;
+use haze_render::walker::Walker;
 use haze_scene::camera::{FilmProjector, PixelFilter};
 use haze_scene::lights::EmissionSample;
 use haze_scene::shape::Geometry;
@@ -321,17 +322,18 @@ impl CausticTracer {
         out: &mut Vec<(f32, f32, Rgb)>,
     ) {
         let Some(e) = self.sample_emission(scene, s) else { return };
-        let (mut ray, mut medium) = crate::lighttrace::emission_ray(scene, &e);
+        let (ray, medium) = crate::lighttrace::emission_ray(scene, &e);
+        let mut walker = Walker::new(ray, medium);
         let mut beta = e.weight * inv_paths;
         let mut through_delta = false;
         // As light tracing caps its VRLs in an unbounded medium.
         let max_len = self.max_len;
         let mut events = 0;
-        for _ in 0..haze_core::walk::MAX_CHAIN_VERTICES {
-            let hit = scene.intersect(&ray);
-            if let Some(m) = medium {
-                let med = scene.medium(m);
-                let len = hit.map_or(max_len, |h| h.t).min(max_len);
+        while walker.next_vertex() {
+            let leg = walker.trace_leg(scene);
+            let ray = walker.ray;
+            if let Some(m) = walker.medium {
+                let len = leg.t_surface.min(max_len);
                 if through_delta && len > 0.0 {
                     let u = s.next_1d();
                     if let Some(splat) = view.connect_beam(scene, ray.o, ray.d, len, m, beta, u, s) {
@@ -339,14 +341,11 @@ impl CausticTracer {
                     }
                 }
                 // A heterogeneous medium's beam by ratio tracking (docs/theory.md §12.4, §12.5).
-                match &med.kind {
-                    MediumKind::Homogeneous(c) => beta *= transmittance(c.sigma_t, len),
-                    MediumKind::Grid(h) => beta *= h.transmittance(ray.o, ray.d, 0.0, len, s),
-                }
+                beta *= walker.transmittance(scene, len, s);
             }
-            let Some(h) = hit else { return };
+            let Some(h) = leg.hit.map(|h| scene.interaction(&h)) else { return };
             let shape = &scene.shapes[h.shape as usize];
-            if scene.cross_if_null(&h, &mut ray, &mut medium) {
+            if walker.cross_if_null(scene, &h) {
                 continue;
             }
             if shape.bsdf.is_black() || beta.is_black() {
@@ -364,7 +363,7 @@ impl CausticTracer {
                         flux: beta,
                         shape: h.shape,
                         tex: h.tex(),
-                        medium,
+                        medium: walker.medium,
                     };
                     if let Some(splat) = view.connect_surface(scene, &vpl) {
                         out.push(splat);
@@ -385,9 +384,7 @@ impl CausticTracer {
             }
             // Adjoint transport, as in light tracing: the radiance-only 1/eta^2 is undone.
             beta *= bs.weight * (bs.eta * bs.eta);
-            let d = frame.to_world(bs.wo);
-            medium = scene.medium_towards(&h, d, medium);
-            ray = Ray::new(offset_origin(h.p, h.n, d), d);
+            walker.bounce(scene, &h, frame.to_world(bs.wo));
         }
     }
 }

@@ -11,6 +11,7 @@ pub mod image_io;
 pub mod integrators;
 pub mod metrics;
 pub mod progressive;
+pub mod walker;
 
 pub use components::{Component, PathRadiance};
 pub use film::Film;

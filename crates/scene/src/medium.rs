@@ -181,6 +181,29 @@ impl Medium {
         }
     }
 
+    /// The transmittance along `o + t d` over `[t0, t1]`: `exp(-sigma_t (t1 - t0))` in a
+    /// homogeneous medium (no number drawn), a ratio-tracking estimate against the majorant grid
+    /// in a grid medium (numbers from `sampler`; (T30), `docs/theory.md` §12.4).
+    #[inline]
+    pub fn transmittance(&self, o: Vec3, d: Vec3, t0: f32, t1: f32, sampler: &mut Sampler) -> Rgb {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => haze_core::transmittance::transmittance(h.sigma_t, t1 - t0),
+            MediumKind::Grid(g) => g.transmittance(o, d, t0, t1, sampler),
+        }
+    }
+
+    /// The part of `o + t d` over `[t0, t1]` where the medium may interact: all of it in a
+    /// homogeneous medium (`None` if empty), in a grid medium the span of the majorant cells
+    /// with a positive majorant (`Heterogeneous::clip`; the medium is empty elsewhere, (T27),
+    /// (T28)).
+    #[inline]
+    pub fn support(&self, o: Vec3, d: Vec3, t0: f32, t1: f32) -> Option<(f32, f32)> {
+        match &self.kind {
+            MediumKind::Homogeneous(_) => (t1 > t0).then_some((t0, t1)),
+            MediumKind::Grid(g) => g.clip(o, d, t0, t1),
+        }
+    }
+
     /// [`Self::begin_flight`] and [`Self::end_flight`] at once, for a walker that knows its
     /// surface first.
     pub fn sample_flight(
@@ -271,6 +294,27 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// `transmittance` is Beer-Lambert over `[t0, t1]` in both kinds (a constant grid's ratio
+    /// tracking is exact), and `support` is the whole interval in a homogeneous medium, the
+    /// part inside the box in a grid.
+    #[test]
+    fn transmittance_and_support_in_both_kinds() {
+        let sigma_t = Rgb::new(0.5, 1.5, 3.0);
+        let (o, d) = (Vec3::new(0.1, 0.5, 0.5), Vec3::X);
+        let mut s = Sampler::new(3, 0, 0);
+        for medium in [homogeneous(sigma_t, Rgb::ONE), constant_grid(sigma_t, Rgb::ONE)] {
+            let tr = medium.transmittance(o, d, 0.2, 0.7, &mut s);
+            for c in 0..3 {
+                let want = (-sigma_t[c] * 0.5).exp();
+                assert!((tr[c] - want).abs() < 1e-5 * want, "{}: {c}: {} vs {want}", medium.name, tr[c]);
+            }
+            assert_eq!(medium.support(o, d, 0.3, 0.3), None, "{}: empty interval", medium.name);
+        }
+        assert_eq!(homogeneous(sigma_t, Rgb::ONE).support(o, d, 0.0, 5.0), Some((0.0, 5.0)));
+        let (a, b) = constant_grid(sigma_t, Rgb::ONE).support(o, d, 0.0, 5.0).expect("crosses the box");
+        assert!(a.abs() < 1e-6 && (b - 0.9).abs() < 1e-5, "grid support [{a}, {b}], box [0, 0.9]");
     }
 
     /// The bounds: exact for a homogeneous medium, above every coefficient of a grid.

@@ -12,7 +12,7 @@
 //!   BSDF may pass light through (thin glass: not an event), since its direction would not be
 //!   followed.
 //! - Russian roulette once `depth > rr_depth`, survival `q = min(max(throughput) eta^2, 0.95)`
-//!   (`haze_core::walk`, shared by every walker).
+//!   (`Walker::roulette`, shared by every walk: `crate::walker`).
 //! - Media change only at shapes that declare an interior or exterior medium.
 //! - Emitters are sampled uniformly; NEE and phase/BSDF sampling are combined with the power
 //!   heuristic; emitters hit directly by the camera or after a specular chain count fully.
@@ -25,12 +25,11 @@
 use super::nee::{area_hit_weight, environment_hits, surface_nee, transmittance_to_sampled};
 use super::Integrator;
 use crate::components::{Component, PathRadiance};
+use crate::walker::Walker;
 use glam::Vec3;
-use haze_core::ray::offset_origin;
 use haze_core::sampling::power_heuristic;
 use haze_core::transmittance::hero_channel;
 use haze_core::{Ray, Rgb, Sampler};
-use haze_scene::accel::Leaving;
 use haze_scene::bsdf::BsdfSample;
 use haze_scene::Flight;
 use haze_scene::{IntegratorSpec, MediumId, Scene};
@@ -83,8 +82,8 @@ impl Integrator for VolPath {
 /// the middle (`haze_manylight::gather`, the media it path-traces) with its own counts.
 #[derive(Clone, Copy, Debug)]
 pub struct PathState {
-    pub ray: Ray,
-    pub medium: Option<MediumId>,
+    /// Where the walk goes: its ray, medium and what its next query may use.
+    pub walker: Walker,
     /// Throughput `f / p_hero`.
     pub beta: Rgb,
     /// The pdf ratios `r_c = p_c / p_hero` of the path so far (path-level spectral MIS).
@@ -102,10 +101,6 @@ pub struct PathState {
     /// The pdf and position of the last non-specular sampling, for MIS at emitter hits.
     pub last_pdf: f32,
     pub last_p: Vec3,
-    /// The next query is a camera ray's, answered from the scene's camera grid.
-    pub first_query: bool,
-    /// The shape the current ray cannot hit, having left it (`Scene::leaving`).
-    pub leaving: Leaving,
     /// The emitter hits another estimator counts (none for a path of volpath's own).
     pub hand_off: HandOff,
 }
@@ -114,8 +109,7 @@ impl PathState {
     /// A camera path along `ray` from `medium`, its hero channel `hero`.
     pub fn camera(ray: Ray, medium: Option<MediumId>, hero: usize) -> PathState {
         PathState {
-            ray,
-            medium,
+            walker: Walker::camera(ray, medium),
             beta: Rgb::ONE,
             r: Rgb::ONE,
             hero,
@@ -126,8 +120,6 @@ impl PathState {
             specular_chain: true,
             last_pdf: 1.0,
             last_p: ray.o,
-            first_query: true,
-            leaving: Leaving::NONE,
             hand_off: HandOff::default(),
         }
     }
@@ -180,8 +172,7 @@ impl VolPath {
         // `-1` (unlimited) and anything longer stop at the hard cap, `MAX_PATH_DEPTH`.
         let max_depth = haze_scene::depth_limit(self.max_depth);
         let PathState {
-            mut ray,
-            mut medium,
+            mut walker,
             mut beta,
             mut r,
             hero,
@@ -192,53 +183,38 @@ impl VolPath {
             mut specular_chain,
             mut last_pdf,
             mut last_p,
-            mut first_query,
-            mut leaving,
             mut hand_off,
         } = st;
-        loop {
+        while walker.next_vertex() {
             if depth > self.rr_depth {
                 let m = (beta / r.mean()).max_component() * eta * eta;
-                let Some(q) = haze_core::walk::roulette(m, sampler.next_1d()) else { break };
+                let Some(q) = Walker::roulette(m, sampler) else { break };
                 beta /= q;
             }
             if depth >= max_depth || beta.is_black() {
                 break;
             }
 
-            // In a homogeneous medium the free-flight distance comes first (the same random
-            // number as always): the surface matters only if it lies before that distance, so
-            // the ray is cut there and the traversal prunes every box beyond it. The hit found is
-            // the closest one whenever the path reaches it; otherwise the flight ends at its
-            // sampled distance, whose weight does not depend on the surface.
-            let flight = medium.map(|mid| scene.medium(mid).begin_flight(hero, sampler));
-            let query = match flight {
-                Some(start) => Ray { t_max: start.query_limit(ray.t_max), ..ray },
-                None => ray,
-            };
-            // Whether the path scatters in a homogeneous medium or reaches a surface, the
-            // sampler's next numbers are those of its next-event estimation (in a heterogeneous
-            // medium delta tracking draws first, and the hint is wasted): an environment map's
-            // cache misses for that sample then overlap the traversal below.
-            // No emitter can light a point in this medium: its next-event estimation below is
-            // skipped, and so is the hint; so it is at the last vertex the depth allows, which
-            // estimates nothing (a vertex at `depth` does next-event estimation only if
-            // `depth + 1 < max_depth`, on a surface or in a medium).
+            // The leg's free flight (`Walker::sample_leg`). Whether the path scatters in a
+            // homogeneous medium or reaches a surface, the sampler's next numbers are those of
+            // its next-event estimation (in a heterogeneous medium delta tracking draws first,
+            // and the hint is wasted): an environment map's cache misses for that sample then
+            // overlap the traversal. No emitter can light a point in this medium: its next-event
+            // estimation below is skipped, and so is the hint; so it is at the last vertex the
+            // depth allows, which estimates nothing (a vertex at `depth` does next-event
+            // estimation only if `depth + 1 < max_depth`, on a surface or in a medium).
+            let medium = walker.medium;
             let unlit = scene.medium_unlit(medium);
-            if !unlit && depth + 1 < max_depth {
-                scene.prefetch_emitter_sample(sampler);
-            }
-            // The surface interaction only once the path reaches the surface (below).
-            let hit = if std::mem::take(&mut first_query) {
-                scene.intersect_camera(&query)
-            } else {
-                scene.intersect_preliminary_leaving(&query, leaving)
-            };
-            let t_surface = hit.map_or(ray.t_max, |h| h.t());
+            let (leg, flight) = walker.sample_leg(scene, hero, sampler, |s| {
+                if !unlit && depth + 1 < max_depth {
+                    scene.prefetch_emitter_sample(s);
+                }
+            });
+            let ray = walker.ray;
 
-            if let (Some(mid), Some(start)) = (medium, flight) {
+            if let (Some(mid), Some(flight)) = (medium, flight) {
                 let med = scene.medium(mid);
-                match med.end_flight(start, ray.o, ray.d, t_surface, hero, sampler) {
+                match flight {
                     // `sigma_s` multiplies after the depth check, as it always did (the same
                     // rounding; a grid medium's `weight` already holds `sigma_s(x)`).
                     Flight::Scatter { t, weight, sigma_s, ratio } => {
@@ -280,8 +256,7 @@ impl VolPath {
                         last_pdf = pdf;
                         last_p = p;
                         specular_chain = false;
-                        ray = Ray::new(p, d);
-                        leaving = Leaving::NONE;
+                        walker.scatter(p, d);
                         continue;
                     }
                     Flight::Pass { weight, ratio } => {
@@ -295,7 +270,7 @@ impl VolPath {
             let count_direct = depth == 0 || specular_chain;
             let visible = !(depth == 0 && self.hide_emitters);
 
-            let Some(h) = hit.map(|h| scene.interaction(&h)) else {
+            let Some(h) = leg.hit.map(|h| scene.interaction(&h)) else {
                 if visible && count_direct {
                     // Weight 1: no pdf needed (an environment map's pdf is a lookup in its
                     // sampling table, a cache miss, for every escaping camera or glass path).
@@ -319,8 +294,7 @@ impl VolPath {
             }
 
             let shape = &scene.shapes[h.shape as usize];
-            if scene.cross_if_null(&h, &mut ray, &mut medium) {
-                leaving = scene.leaving(h.shape, h.n, ray.d);
+            if walker.cross_if_null(scene, &h) {
                 continue;
             }
             if shape.bsdf.is_black() {
@@ -338,7 +312,6 @@ impl VolPath {
 
             let frame = scene.shading_frame(&h);
             let wi = frame.to_local(-ray.d);
-            let medium_towards = |d: glam::Vec3| scene.medium_towards(&h, d, medium);
 
             if !shape.bsdf.is_specular() && depth + 1 < max_depth {
                 let direct = surface_nee(scene, sampler, &h, &frame, wi, medium, 1.0);
@@ -365,9 +338,7 @@ impl VolPath {
                 last_pdf = bs.pdf;
                 specular_chain = bs.specular;
             }
-            medium = medium_towards(d);
-            ray = Ray::new(offset_origin(h.p, h.n, d), d);
-            leaving = scene.leaving(h.shape, h.n, d);
+            walker.bounce(scene, &h, d);
         }
     }
 }
