@@ -67,8 +67,7 @@ use haze_render::integrators::transmittance_to;
 use haze_render::walker::Walker;
 use haze_scene::camera::{FilmProjector, PixelFilter};
 use haze_scene::lights::EmissionSample;
-use haze_scene::shape::Geometry;
-use haze_scene::{Emitter, MediumId, MediumKind, Scene};
+use haze_scene::{MediumId, MediumKind, Scene};
 use rayon::prelude::*;
 
 /// One pass's light-tracing splats: per pixel (row-major, as the film), the light the pass's
@@ -130,16 +129,14 @@ impl CausticTracer {
             .shapes
             .iter()
             .filter(|s| s.bsdf.is_specular() && !s.bsdf.is_null())
-            .filter_map(|s| bounding_sphere(&s.geometry))
+            .filter_map(|s| s.geometry.bounding_sphere())
+            .map(|(c, r)| Target { c, r })
             .collect();
         if targets.is_empty() || paths == 0 {
             return None;
         }
-        let mut weights: Vec<(u32, f32)> = scene
-            .emitters
-            .iter()
-            .enumerate()
-            .filter_map(|(k, e)| emitter_weight(scene, k as u32, e, &targets).map(|w| (k as u32, w)))
+        let mut weights: Vec<(u32, f32)> = (0..scene.emitters.len() as u32)
+            .filter_map(|k| emitter_weight(scene, k, &targets).map(|w| (k, w)))
             .collect();
         if weights.is_empty() {
             return None;
@@ -194,15 +191,9 @@ impl CausticTracer {
         let i = self.cdf.partition_point(|&c| c < u).min(self.emitters.len() - 1);
         let (k, p_k) = self.emitters[i];
         let (u_pos, u_pick, u_dir) = (s.next_2d(), s.next_1d(), s.next_2d());
-        if let Emitter::Directional { d, irradiance } = &scene.emitters[k as usize] {
-            let (p, p_pos) = self.sample_sun_line(scene, *d, u_pick, u_dir)?;
-            return Some(EmissionSample {
-                p,
-                d: *d,
-                n: None,
-                weight: *irradiance / (p_k * p_pos),
-                emitter: k,
-            });
+        if let Some((d, irradiance)) = scene.emitters[k as usize].parallel_light() {
+            let (p, p_pos) = self.sample_sun_line(scene, d, u_pick, u_dir)?;
+            return Some(EmissionSample { p, d, n: None, weight: irradiance / (p_k * p_pos), emitter: k });
         }
         let ep = scene.sample_emitter_point(k, u_pos)?;
         let (d, pdf_dir) = self.sample_direction(ep.p, u_pick, u_dir)?;
@@ -389,38 +380,13 @@ impl CausticTracer {
     }
 }
 
-/// A bounding sphere of a shape's geometry.
-fn bounding_sphere(g: &Geometry) -> Option<Target> {
-    match g {
-        Geometry::Sphere { center, radius, .. } => Some(Target { c: *center, r: *radius }),
-        Geometry::Disk { to_world, .. } => {
-            let ex = to_world.transform_vector3(Vec3::X).length();
-            let ey = to_world.transform_vector3(Vec3::Y).length();
-            Some(Target { c: to_world.transform_point3(Vec3::ZERO), r: ex.max(ey) * 1.001 })
-        }
-        Geometry::Mesh(m) => {
-            let (lo, hi) = m
-                .positions
-                .iter()
-                .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), p| {
-                    (lo.min(*p), hi.max(*p))
-                });
-            if !lo.is_finite() || !hi.is_finite() {
-                return None;
-            }
-            let c = 0.5 * (lo + hi);
-            let r = m.positions.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
-            Some(Target { c, r: r * 1.001 + 1e-5 })
-        }
-    }
-}
-
-/// A rough measure of the power emitter `e` (index `k`) sends towards the targets (for `P_k`),
-/// or `None` if it starts no caustic path: environments (`constant`, `envmap`), whose caustics
-/// seen directly the camera path's continuation through the delta chain finds, since it can
-/// hit them (`gather.rs` leaves only area emitters to these paths); the sun cannot be hit, so
-/// its caustics come from here.
-fn emitter_weight(scene: &Scene, k: u32, e: &Emitter, targets: &[Target]) -> Option<f32> {
+/// The power emitter `k` sends towards the targets, roughly (for `P_k`:
+/// `Scene::emitter_power_towards` with the targets' cones and disks), or `None` if it starts no
+/// caustic path: environments (`constant`, `envmap`), whose caustics seen directly the camera
+/// path's continuation through the delta chain finds, since it can hit them (`gather.rs` leaves
+/// only area emitters to these paths); the sun cannot be hit, so its caustics come from here.
+fn emitter_weight(scene: &Scene, k: u32, targets: &[Target]) -> Option<f32> {
+    // The solid angle of the targets' cones from `p` (all directions inside a sphere).
     let omega = |p: Vec3| -> f32 {
         targets
             .iter()
@@ -434,22 +400,9 @@ fn emitter_weight(scene: &Scene, k: u32, e: &Emitter, targets: &[Target]) -> Opt
             })
             .sum()
     };
-    match e {
-        Emitter::Point { position, intensity } => Some(intensity.mean() * omega(*position)),
-        Emitter::Spot { to_world, intensity, .. } => {
-            Some(intensity.mean() * omega(to_world.transform_point3(Vec3::ZERO)))
-        }
-        Emitter::Area { shape, radiance } => {
-            let sh = &scene.shapes[*shape as usize];
-            let area = scene.area_sampler(k)?.area;
-            let c = bounding_sphere(&sh.geometry).map_or(Vec3::ZERO, |t| t.c);
-            Some(radiance.mean().mean() * area * omega(c) / PI)
-        }
-        Emitter::Directional { irradiance, .. } => {
-            Some(irradiance.mean() * targets.iter().map(|t| PI * t.r * t.r).sum::<f32>())
-        }
-        _ => None,
-    }
+    // The targets' disks across any direction.
+    let disks = |_: Vec3| -> f32 { targets.iter().map(|t| PI * t.r * t.r).sum() };
+    scene.emitter_power_towards(k, omega, disks)
 }
 
 /// Sums splats into the film's pixels with the reconstruction filter.

@@ -5,6 +5,7 @@ use crate::medium::MediumId;
 use glam::{Mat4, Vec2, Vec3};
 use haze_core::sampling::sample_uniform_disk_concentric;
 use haze_core::{Ray, Sampler};
+use std::ops::{Add, Div, Mul, Sub};
 
 /// The camera. Camera space follows Mitsuba: looking down `+z`, `+y` up, `+x` to the
 /// *left* (so `lookat` builds `to_world` with columns `(left, up, dir, origin)`). Film pixel
@@ -154,14 +155,21 @@ impl Camera {
     /// [`Self::generate_ray`] with the per-camera constants (a `tan`, the origin) computed once,
     /// for the render loop: the same rays bit for bit.
     pub fn ray_generator(&self) -> RayGenerator<'_> {
-        let tan_x = (0.5 * self.fov_x_deg.to_radians()).tan();
-        let aspect_inv = self.height as f32 / self.width as f32;
-        let (tan_x, tan_y) = match self.projection {
-            // The half extents of the film rectangle instead of slopes.
-            Projection::Orthographic => (1.0, aspect_inv),
-            _ => (tan_x, tan_x * aspect_inv),
+        RayGenerator { cam: self, film: self.film_plane(), o: self.to_world.transform_point3(Vec3::ZERO) }
+    }
+
+    /// The film's rectangle in camera space ([`FilmPlane`]), in `f32` (the rays) or `f64` (the
+    /// camera grid): the pinhole's slopes `(tan(fov_x / 2), tan(fov_x / 2) H / W)` for
+    /// `perspective` and `thinlens`, the near plane's half extents `(1, H / W)` for
+    /// `orthographic`.
+    pub fn film_plane<F: FilmFloat>(&self) -> FilmPlane<F> {
+        let (width, height) = (F::from_u32(self.width), F::from_u32(self.height));
+        let aspect_inv = height / width;
+        let half_x = match self.projection {
+            Projection::Orthographic => F::ONE,
+            _ => half_slope(self.fov_x_deg),
         };
-        RayGenerator { cam: self, tan_x, tan_y, o: self.to_world.transform_point3(Vec3::ZERO) }
+        FilmPlane { half_x, half_y: half_x * aspect_inv, width, height }
     }
 
     pub fn position(&self) -> Vec3 {
@@ -191,14 +199,13 @@ impl Camera {
         if !self.is_pinhole() {
             return None;
         }
-        let RayGenerator { tan_x, tan_y, o, .. } = self.ray_generator();
+        let RayGenerator { film, o, .. } = self.ray_generator();
         Some(FilmProjector {
             cam: self,
             o,
             to_camera: self.to_world.inverse(),
-            tan_x,
-            tan_y,
-            pixel_density: (self.width * self.height) as f32 / (4.0 * tan_x * tan_y),
+            film,
+            pixel_density: (self.width * self.height) as f32 / (4.0 * film.half_x * film.half_y),
         })
     }
 }
@@ -209,11 +216,11 @@ pub struct FilmPoint {
     /// Film position in pixel units, `[0, width) x [0, height)`.
     pub px: f32,
     pub py: f32,
-    /// `(W H / A) / cos^3 θ`, with `A = 4 tan_x tan_y` the film's area at distance 1 and θ the
-    /// angle from the optical axis (cos θ from camera space, so any scale of `to_world` drops
-    /// out): the factor by which a light tracer's splat at this point, of radiance arriving at
-    /// the pinhole per unit solid angle, becomes a pixel value (`crate`'s users: the caustic
-    /// paths, `haze_manylight::splat`).
+    /// `(W H / A) / cos^3 θ`, with `A = 4 half_x half_y` the film's area at distance 1
+    /// ([`FilmPlane`]) and θ the angle from the optical axis (cos θ from camera space, so any
+    /// scale of `to_world` drops out): the factor by which a light tracer's splat at this
+    /// point, of radiance arriving at the pinhole per unit solid angle, becomes a pixel value
+    /// (`crate`'s users: the caustic paths, `haze_manylight::splat`).
     pub density: f32,
     /// The fraction of the way from the pinhole to the point where camera rays start (the near
     /// clip plane): only what lies beyond it is seen.
@@ -226,25 +233,22 @@ pub struct FilmProjector<'a> {
     /// The pinhole.
     pub o: Vec3,
     to_camera: Mat4,
-    tan_x: f32,
-    tan_y: f32,
+    film: FilmPlane<f32>,
     /// `W H / A`: pixels per unit area of the image plane at distance 1.
     pixel_density: f32,
 }
 
 impl FilmProjector<'_> {
-    /// The film point of world point `p`, or `None` outside the film or the clip planes:
-    /// with `q` the camera-space point, `s = (q.x / (q.z tan_x), q.y / (q.z tan_y))` and pixel
-    /// `((1 - s.x) W / 2, (1 - s.y) H / 2)`, inverting [`RayGenerator::generate_through`].
+    /// The film point of world point `p`, or `None` outside the film or the clip planes: the
+    /// film position of its camera-space point `q` ([`FilmPlane::film_position`]), inverting
+    /// [`RayGenerator::generate_through`].
     pub fn project(&self, p: Vec3) -> Option<FilmPoint> {
         let cam = self.cam;
         let q = self.to_camera.transform_point3(p);
         if !(q.z >= cam.near_clip && q.z <= cam.far_clip) {
             return None;
         }
-        let (sx, sy) = (q.x / (q.z * self.tan_x), q.y / (q.z * self.tan_y));
-        let px = (1.0 - sx) * 0.5 * cam.width as f32;
-        let py = (1.0 - sy) * 0.5 * cam.height as f32;
+        let [px, py] = self.film.film_position(q.x, q.y, q.z);
         if !(px >= 0.0 && px < cam.width as f32 && py >= 0.0 && py < cam.height as f32) {
             return None;
         }
@@ -253,13 +257,106 @@ impl FilmProjector<'_> {
     }
 }
 
+/// The float types [`FilmPlane`]'s formulas are written for, once: `f32` for the camera's rays
+/// and the caustic paths' splats, `f64` for the camera grid's conservative pyramids
+/// (`accel/camera_grid.rs`).
+pub trait FilmFloat:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    const ONE: Self;
+    const TWO: Self;
+    const HALF: Self;
+    fn from_f32(x: f32) -> Self;
+    fn from_u32(x: u32) -> Self;
+    fn tan(self) -> Self;
+    fn to_radians(self) -> Self;
+}
+
+macro_rules! film_float {
+    ($t:ty) => {
+        impl FilmFloat for $t {
+            const ONE: $t = 1.0;
+            const TWO: $t = 2.0;
+            const HALF: $t = 0.5;
+            #[inline]
+            fn from_f32(x: f32) -> $t {
+                x as $t
+            }
+            #[inline]
+            fn from_u32(x: u32) -> $t {
+                x as $t
+            }
+            #[inline]
+            fn tan(self) -> $t {
+                <$t>::tan(self)
+            }
+            #[inline]
+            fn to_radians(self) -> $t {
+                <$t>::to_radians(self)
+            }
+        }
+    };
+}
+film_float!(f32);
+film_float!(f64);
+
+/// The film as a rectangle in a camera-space plane: the one definition of where a film
+/// position goes ([`Camera::film_plane`]). Film position `p` (pixels, `[0, W] x [0, H]`,
+/// `(0, 0)` the top-left corner) is the plane point
+///
+/// ```text
+///   (s.x half_x, s.y half_y),   s = (1 - 2 p.x / W, 1 - 2 p.y / H)
+/// ```
+///
+/// (`s` in `[-1, 1]^2`; camera `+x` is left and `+y` up, hence the signs). For the pinhole
+/// (`perspective`, and `thinlens` through its lens centre) the plane is `z = 1`, so the plane
+/// point `(x, y)` is the camera-space direction `(x, y, 1)` of the ray through `p`, and the
+/// half extents are the slopes of the film's edges,
+///
+/// ```text
+///   half_x = tan(fov_x / 2),   half_y = half_x H / W .
+/// ```
+///
+/// For `orthographic` the plane is the near clip plane and the half extents are `(1, H / W)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmPlane<F> {
+    pub half_x: F,
+    pub half_y: F,
+    width: F,
+    height: F,
+}
+
+impl<F: FilmFloat> FilmPlane<F> {
+    /// The plane point of film position `(px, py)` (see [`FilmPlane`]).
+    #[inline]
+    pub fn plane_point(&self, px: F, py: F) -> [F; 2] {
+        let sx = F::ONE - F::TWO * px / self.width;
+        let sy = F::ONE - F::TWO * py / self.height;
+        [sx * self.half_x, sy * self.half_y]
+    }
+
+    /// The film position of the camera-space point `(x, y, z)` (`z > 0`) seen from the pinhole,
+    /// the inverse of [`Self::plane_point`] on the plane `z = 1`:
+    /// `s = (x / (z half_x), y / (z half_y))`, `p = ((1 - s.x) W / 2, (1 - s.y) H / 2)`.
+    #[inline]
+    pub fn film_position(&self, x: F, y: F, z: F) -> [F; 2] {
+        let (sx, sy) = (x / (z * self.half_x), y / (z * self.half_y));
+        [(F::ONE - sx) * F::HALF * self.width, (F::ONE - sy) * F::HALF * self.height]
+    }
+}
+
+/// `tan(fov_x / 2)` for a horizontal field of view in degrees: the slope of the film's side
+/// edges of a pinhole ([`FilmPlane`]'s `half_x`), and of a projector's image
+/// (`crate::projector`).
+#[inline]
+pub fn half_slope<F: FilmFloat>(fov_x_deg: f32) -> F {
+    (F::HALF * F::from_f32(fov_x_deg).to_radians()).tan()
+}
+
 /// Primary rays of a camera (see [`Camera::ray_generator`]).
 pub struct RayGenerator<'a> {
     cam: &'a Camera,
-    /// Half the film's extent at camera-space distance 1 (the slopes of its edges); for an
-    /// orthographic camera, the half extents of the film rectangle.
-    tan_x: f32,
-    tan_y: f32,
+    film: FilmPlane<f32>,
     o: Vec3,
 }
 
@@ -285,10 +382,10 @@ impl RayGenerator<'_> {
 
     /// The ray through film position `p` and the camera-space lens point `(lens, 0)`.
     ///
-    /// With `s = (1 - 2 p.x / W, 1 - 2 p.y / H)` the film position scaled to `[-1, 1]^2`:
-    /// - pinhole: direction `(s.x tan_x, s.y tan_y, 1)` from the origin;
-    /// - thin lens: from `(lens, 0)` towards `focus_distance (s.x tan_x, s.y tan_y, 1)`;
-    /// - orthographic: along `+z` from `(s.x, s.y / aspect, near_clip)`.
+    /// With `(x, y)` the film position's point of the film plane ([`FilmPlane::plane_point`]):
+    /// - pinhole: direction `(x, y, 1)` from the origin;
+    /// - thin lens: from `(lens, 0)` towards `focus_distance (x, y, 1)`;
+    /// - orthographic: along `+z` from `(x, y, near_clip)`.
     ///
     /// Perspective rays start where they cross the near clip plane `z = near_clip` and end at
     /// `z = far_clip` (camera-space depths); orthographic ones run `far_clip - near_clip` in
@@ -296,9 +393,8 @@ impl RayGenerator<'_> {
     #[inline]
     pub fn generate_through(&self, p: Vec2, lens: Vec2) -> Ray {
         let cam = self.cam;
-        let sx = 1.0 - 2.0 * p.x / cam.width as f32;
-        let sy = 1.0 - 2.0 * p.y / cam.height as f32;
-        let local = Vec3::new(sx * self.tan_x, sy * self.tan_y, 1.0);
+        let [x, y] = self.film.plane_point(p.x, p.y);
+        let local = Vec3::new(x, y, 1.0);
         let (o, d_local) = match cam.projection {
             Projection::Pinhole => (self.o, local * (1.0 / local.length())),
             Projection::ThinLens { focus_distance, .. } => {
@@ -369,6 +465,28 @@ mod tests {
         assert_ray(&r, [-0.0859794, 0.133909, 0.01], [0.278596, 0.0835635, 0.956766], 10451.864);
         let r = draw(&lens(3.0), px(0.1, 0.3), Vec2::new(0.2, 0.9));
         assert_ray(&r, [-0.0856832, 0.133465, 0.01], [0.305216, 0.0409178, 0.951403], 10510.777);
+    }
+
+    /// The film plane's two directions are inverses, its `f32` and `f64` forms agree to the
+    /// rounding of `f32` (the camera grid widens its cells by 1e-6 of the film for this), and a
+    /// pinhole ray's direction projects back onto its film position.
+    #[test]
+    fn film_plane_round_trips() {
+        let cam = camera(Projection::Pinhole, Mat4::from_rotation_y(0.3), 0.01);
+        let (f, g) = (cam.film_plane::<f32>(), cam.film_plane::<f64>());
+        let projector = cam.film_projector().unwrap();
+        let mut sampler = Sampler::from_seed(7);
+        for _ in 0..1000 {
+            let p = Vec2::new(sampler.next_1d() * 200.0, sampler.next_1d() * 120.0);
+            let [x, y] = f.plane_point(p.x, p.y);
+            let [xd, yd] = g.plane_point(p.x as f64, p.y as f64);
+            assert!((x as f64 - xd).abs() <= 1e-6 * g.half_x && (y as f64 - yd).abs() <= 1e-6 * g.half_y);
+            let [px, py] = g.film_position(xd * 2.5, yd * 2.5, 2.5);
+            assert!((px - p.x as f64).abs() < 1e-9 && (py - p.y as f64).abs() < 1e-9, "{px} {py} vs {p}");
+            let ray = cam.generate_ray(p);
+            let back = projector.project(ray.o + ray.d).unwrap();
+            assert!((back.px - p.x).abs() < 1e-3 && (back.py - p.y).abs() < 1e-3, "{back:?} vs {p}");
+        }
     }
 
     /// Every ray of a thin lens through the same film position meets at the focal plane, and

@@ -147,6 +147,16 @@ impl Emitter {
         }
     }
 
+    /// The sun's light as `(d, E)`: the unit direction of travel `d` and the irradiance `E`
+    /// (W/m^2) on a plane perpendicular to `d` of a `directional` emitter, whose every ray of
+    /// direction `d` carries it; `None` for other emitters.
+    pub fn parallel_light(&self) -> Option<(Vec3, Rgb)> {
+        match self {
+            Emitter::Directional { d, irradiance } => Some((*d, *irradiance)),
+            _ => None,
+        }
+    }
+
     /// The shape of an area emitter.
     pub fn area_shape(&self) -> Option<u32> {
         match self {

@@ -532,6 +532,44 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// A rough measure of the power emitter `emitter` sends towards a set of targets, for
+    /// choosing among emitters in proportion to it (only the ratios matter; the caustic paths
+    /// aim at the delta shapes with it). With `Ω(x)` the solid angle the targets subtend from
+    /// the point `x` (`solid_angle`) and `A(d)` their cross-section perpendicular to the
+    /// direction `d` (`cross_section`), and bars the mean over the channels:
+    ///
+    /// ```text
+    ///   point, spot     Ī Ω(p)              (p the position; the spot's cone ignored)
+    ///   area            L̄ A Ω(c) / π        (A the area, c its bounding sphere's centre,
+    ///                                         L̄ a textured radiance's mean)
+    ///   directional     Ē A(d)              (d the direction of travel)
+    /// ```
+    ///
+    /// `None` for the environments (`constant`, `envmap`: light from every direction, no
+    /// position) and the `projector`, which only volpath renders.
+    pub fn emitter_power_towards(
+        &self,
+        emitter: u32,
+        solid_angle: impl Fn(Vec3) -> f32,
+        cross_section: impl Fn(Vec3) -> f32,
+    ) -> Option<f32> {
+        match &self.emitters[emitter as usize] {
+            Emitter::Point { position, intensity } => Some(intensity.mean() * solid_angle(*position)),
+            Emitter::Spot { to_world, intensity, .. } => {
+                Some(intensity.mean() * solid_angle(to_world.transform_point3(Vec3::ZERO)))
+            }
+            Emitter::Area { shape, radiance } => {
+                let area = self.area_sampler(emitter)?.area;
+                let c = self.shapes[*shape as usize].geometry.bounding_sphere().map_or(Vec3::ZERO, |s| s.0);
+                Some(radiance.mean().mean() * area * solid_angle(c) / haze_core::PI)
+            }
+            Emitter::Directional { d, irradiance } => Some(irradiance.mean() * cross_section(*d)),
+            Emitter::Constant { .. } | Emitter::EnvMap(_) | Emitter::Projector(_) => None,
+        }
+    }
+}
+
 /// Share of the light paths from infinity whose origin is aimed at the media's sphere when there
 /// is one (`docs/theory.md` §13, (T38b)): half, so that the scene's surfaces keep half their
 /// surface VPLs while the media get at least 2.5 times their density of VRLs.

@@ -25,7 +25,7 @@ impl Projector {
     /// `fov_x_deg`: the horizontal field of view; `aspect`: the image's width over its height
     /// (1 for a constant irradiance, as Mitsuba's one-texel "resolution").
     pub fn new(to_world: Mat4, irradiance: Texture, scale: f32, fov_x_deg: f32, aspect: f32) -> Self {
-        let tan_x = (0.5 * fov_x_deg.to_radians()).tan();
+        let tan_x: f32 = crate::camera::half_slope(fov_x_deg);
         Projector { to_world, to_local: to_world.inverse(), irradiance, scale, tan_x, tan_y: tan_x / aspect }
     }
 

@@ -45,7 +45,8 @@ const MIN_NODES: usize = 16;
 /// Longest list a cell keeps (memory: 8 bytes per entry).
 const MAX_LIST: usize = 1024;
 
-/// Film cells (in camera-space slopes `x / z`, `y / z`) with their leaf lists.
+/// Film cells (in camera-space slopes `x / z`, `y / z`, the pinhole's film plane at depth 1,
+/// `crate::camera::FilmPlane`) with their leaf lists.
 #[derive(Clone, Debug)]
 pub struct CameraGrid {
     /// The pinhole.
@@ -115,14 +116,18 @@ impl CameraGrid {
         let to_local = lin.inverse();
         // A plane `n_local . x_local <= 0` in world space: `(M^-T n_local) . (x - apex) <= 0`.
         let to_world_normal = to_local.transpose();
-        let tan_x = (0.5 * (camera.fov_x_deg as f64).to_radians()).tan();
-        let tan_y = tan_x * camera.height as f64 / camera.width as f64;
+        // The film in slopes `x / z`, `y / z` (the camera's projection, in f64): its corner
+        // `(W, H)` has the least slopes (camera `+x` is left, `+y` up), `(0, 0)` the greatest.
+        // Camera rays take their directions from the same formula in f32, ~1e-7 of the film
+        // away, well within the cells' widening below.
+        let film = camera.film_plane::<f64>();
+        let origin = film.plane_point(camera.width as f64, camera.height as f64);
+        let far = film.plane_point(0.0, 0.0);
         let pixels = camera.width as f64 * camera.height as f64;
         let cell_pixels = (pixels / MAX_CELLS).sqrt().max(1.0);
         let nx = (camera.width as f64 / cell_pixels).ceil().max(1.0) as u32;
         let ny = (camera.height as f64 / cell_pixels).ceil().max(1.0) as u32;
-        let size = [2.0 * tan_x / nx as f64, 2.0 * tan_y / ny as f64];
-        let origin = [-tan_x, -tan_y];
+        let size = [(far[0] - origin[0]) / nx as f64, (far[1] - origin[1]) / ny as f64];
         let (lo, hi) = accel.bounds();
         let scale =
             apex.abs().max_element().max(lo.abs().max_element() as f64).max(hi.abs().max_element() as f64);
@@ -142,13 +147,13 @@ impl CameraGrid {
             for cx in 0..nx {
                 // Widened by a thousandth of the cell and a millionth of the film, far above
                 // the f32 rounding of a direction's slopes (`to_local * d`, ~1e-7 of the film).
-                let bounds = |axis: usize, c: u32, tan: f64| {
+                let bounds = |axis: usize, c: u32, half: f64| {
                     let a = origin[axis] + size[axis] * c as f64;
-                    let e = 1e-3 * size[axis] + 1e-6 * tan;
+                    let e = 1e-3 * size[axis] + 1e-6 * half;
                     (a - e, a + size[axis] + e)
                 };
-                let (a0, a1) = bounds(0, cx, tan_x);
-                let (b0, b1) = bounds(1, cy, tan_y);
+                let (a0, a1) = bounds(0, cx, film.half_x);
+                let (b0, b1) = bounds(1, cy, film.half_y);
                 let plane = |n: DVec3| (to_world_normal * n).normalize();
                 let pyramid = Pyramid {
                     apex,

@@ -36,6 +36,37 @@ pub enum Geometry {
     },
 }
 
+impl Geometry {
+    /// A sphere around the geometry, `(centre, radius)`, for aiming at it: the sphere itself; a
+    /// disk's centre with its longer semi-axis; a mesh's box centre with its farthest vertex.
+    /// The last two are widened by 1e-3 relative (and a mesh by 1e-5 more) so that rounding
+    /// never leaves a point of the surface outside. `None` for a mesh without finite vertices.
+    pub fn bounding_sphere(&self) -> Option<(Vec3, f32)> {
+        match self {
+            Geometry::Sphere { center, radius, .. } => Some((*center, *radius)),
+            Geometry::Disk { to_world, .. } => {
+                let ex = to_world.transform_vector3(Vec3::X).length();
+                let ey = to_world.transform_vector3(Vec3::Y).length();
+                Some((to_world.transform_point3(Vec3::ZERO), ex.max(ey) * 1.001))
+            }
+            Geometry::Mesh(m) => {
+                let (lo, hi) = m
+                    .positions
+                    .iter()
+                    .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), p| {
+                        (lo.min(*p), hi.max(*p))
+                    });
+                if !lo.is_finite() || !hi.is_finite() {
+                    return None;
+                }
+                let c = 0.5 * (lo + hi);
+                let r = m.positions.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
+                Some((c, r * 1.001 + 1e-5))
+            }
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Shape {
     /// The XML `id` if given, else a description such as `obj "meshes/a.obj"`, for messages.
