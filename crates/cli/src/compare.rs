@@ -444,9 +444,15 @@ mod tests {
         assert_eq!(spec("vpl_lightcuts:1M").light_count(), Some(1_000_000));
         assert_eq!(spec("vpl_lightcuts:1_000_000").light_count(), Some(1_000_000));
         let s = spec("vrl_lightcuts:100000,cut=bound,epsilon=0.01,max_cut=500");
-        assert_eq!((s.options.lightcuts.cut.epsilon, s.options.lightcuts.cut.max_cut), (0.01, 500));
+        assert_eq!(
+            (s.options.lightcuts.bound.cut.epsilon, s.options.lightcuts.bound.cut.max_cut),
+            (0.01, 500)
+        );
         let o = spec("vrl_lightcuts:10k,cut=bound,bound=tight,builder=median").options;
-        assert_eq!((o.lightcuts.bound, o.lightcuts.builder), (BoundKind::Tight, Builder::MedianSplit));
+        assert_eq!(
+            (o.lightcuts.bound.bound, o.lightcuts.bound.tree.builder),
+            (BoundKind::Tight, Builder::MedianSplit)
+        );
         // The defaults are the engine's.
         let defaults = options::Options::defaults().method;
         assert_eq!(spec("vrl").options.budget, defaults.budget);

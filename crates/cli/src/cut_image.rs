@@ -12,8 +12,7 @@
 
 use anyhow::{Context, Result};
 use haze_engine::methods::Method;
-use haze_engine::options::Options;
-use haze_manylight::integrators::CutStrategy;
+use haze_engine::options::{Options, TreeCut};
 use haze_scene::Scene;
 use std::path::Path;
 
@@ -39,8 +38,8 @@ pub fn legend_height(height: usize) -> usize {
 /// segment of each pixel, and writes the heat map to `path`.
 pub fn write(method: &Method, scene: &Scene, options: &Options, path: &Path) -> Result<()> {
     let sizes = method.cut_sizes(scene, options.seed, options.sampler_for(scene))?;
-    let max_cut = options.method.lightcuts.cut.max_cut;
-    let stochastic = method.cut_strategy() == Some(CutStrategy::Stochastic);
+    let max_cut = options.method.lightcuts.bound.cut.max_cut;
+    let stochastic = method.tree_cut() == Some(TreeCut::Stochastic);
     let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
     let scale = if stochastic { 1.0 } else { max_cut.max(1) as f32 };
     let lh = legend_height(h);

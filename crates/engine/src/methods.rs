@@ -2,12 +2,12 @@
 //! that turns a method and its options (`crate::options`) into an integrator and renders with it.
 
 pub use crate::options::MethodOptions;
-use crate::options::{method_names, resolve, MethodKind, Options, Spelling};
+use crate::options::{method_names, resolve, MethodKind, Options, Spelling, TreeCut};
 use anyhow::{anyhow, bail, Result};
 use haze_core::SamplerSpec;
 use haze_manylight::integrators::{
-    Clamps, CutSizeProbe, CutStrategy, LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls,
-    VrlIntegrator, Vrls,
+    BoundCut, Clamps, CutSizeProbe, LightcutsIntegrator, ManyLightSettings, StochasticCut, VplIntegrator,
+    Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, PassReport, RenderOutput, RenderSettings};
@@ -76,13 +76,49 @@ pub fn prepare(
     Ok((kind, resolve(kind, given, spelling)?))
 }
 
-/// A ready-to-render integrator of any kind.
+/// A ready-to-render integrator of any kind: one variant per method and, for the lightcut
+/// methods, per tree cut (the integrator is generic over its cut strategy).
 pub enum Method {
     VolPath(VolPath),
     Vrl(VrlIntegrator),
     Vpl(VplIntegrator),
-    VrlLightcuts(LightcutsIntegrator<Vrls>),
-    VplLightcuts(LightcutsIntegrator<Vpls>),
+    /// `vrl_lightcuts` with `cut=stochastic`.
+    VrlLightcuts(LightcutsIntegrator<Vrls, StochasticCut>),
+    /// `vpl_lightcuts` with `cut=stochastic`.
+    VplLightcuts(LightcutsIntegrator<Vpls, StochasticCut>),
+    /// `vrl_lightcuts` with `cut=bound`.
+    VrlBoundCut(LightcutsIntegrator<Vrls, BoundCut>),
+    /// `vpl_lightcuts` with `cut=bound`.
+    VplBoundCut(LightcutsIntegrator<Vpls, BoundCut>),
+}
+
+/// `$body` with `$i` bound to the integrator of whichever variant `$method` is.
+macro_rules! each_integrator {
+    ($method:expr, $i:ident => $body:expr) => {
+        match $method {
+            Method::VolPath($i) => $body,
+            Method::Vrl($i) => $body,
+            Method::Vpl($i) => $body,
+            Method::VrlLightcuts($i) => $body,
+            Method::VplLightcuts($i) => $body,
+            Method::VrlBoundCut($i) => $body,
+            Method::VplBoundCut($i) => $body,
+        }
+    };
+}
+
+/// `$body` with `$i` bound to the lightcut integrator of `$method`, or `$other` for methods
+/// without a tree cut.
+macro_rules! each_lightcuts {
+    ($method:expr, $i:ident => $body:expr, _ => $other:expr) => {
+        match $method {
+            Method::VrlLightcuts($i) => $body,
+            Method::VplLightcuts($i) => $body,
+            Method::VrlBoundCut($i) => $body,
+            Method::VplBoundCut($i) => $body,
+            Method::VolPath(_) | Method::Vrl(_) | Method::Vpl(_) => $other,
+        }
+    };
 }
 
 impl Method {
@@ -127,12 +163,24 @@ impl Method {
                 i.clamps = Clamps { vpl: options.vpl_clamp, surface: options.clamp, ..i.clamps };
                 Method::Vpl(i)
             }
-            MethodKind::VrlLightcuts => Method::VrlLightcuts(
-                LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed).map_err(named)?,
-            ),
-            MethodKind::VplLightcuts => Method::VplLightcuts(
-                LightcutsIntegrator::new(scene, many_light(), options.lightcuts, seed).map_err(named)?,
-            ),
+            MethodKind::VrlLightcuts | MethodKind::VplLightcuts => {
+                let lc = &options.lightcuts;
+                let vrls = kind == MethodKind::VrlLightcuts;
+                match lc.cut {
+                    TreeCut::Stochastic if vrls => Method::VrlLightcuts(
+                        LightcutsIntegrator::new(scene, many_light(), lc.stochastic, seed).map_err(named)?,
+                    ),
+                    TreeCut::Stochastic => Method::VplLightcuts(
+                        LightcutsIntegrator::new(scene, many_light(), lc.stochastic, seed).map_err(named)?,
+                    ),
+                    TreeCut::Bound if vrls => Method::VrlBoundCut(
+                        LightcutsIntegrator::new(scene, many_light(), lc.bound, seed).map_err(named)?,
+                    ),
+                    TreeCut::Bound => Method::VplBoundCut(
+                        LightcutsIntegrator::new(scene, many_light(), lc.bound, seed).map_err(named)?,
+                    ),
+                }
+            }
         })
     }
 
@@ -144,24 +192,12 @@ impl Method {
         cancel: &AtomicBool,
         on_pass: impl FnMut(&PassReport),
     ) -> RenderOutput {
-        match self {
-            Method::VolPath(i) => render(scene, i, settings, cancel, on_pass),
-            Method::Vrl(i) => render(scene, i, settings, cancel, on_pass),
-            Method::Vpl(i) => render(scene, i, settings, cancel, on_pass),
-            Method::VrlLightcuts(i) => render(scene, i, settings, cancel, on_pass),
-            Method::VplLightcuts(i) => render(scene, i, settings, cancel, on_pass),
-        }
+        each_integrator!(self, i => render(scene, i, settings, cancel, on_pass))
     }
 
     /// The integrator's line of statistics after rendering, if it has one.
     pub fn summary(&self) -> Option<String> {
-        match self {
-            Method::VolPath(i) => i.summary(),
-            Method::Vrl(i) => i.summary(),
-            Method::Vpl(i) => i.summary(),
-            Method::VrlLightcuts(i) => i.summary(),
-            Method::VplLightcuts(i) => i.summary(),
-        }
+        each_integrator!(self, i => i.summary())
     }
 
     /// Per pixel (row-major, 0 where the camera path meets no medium), from one extra 1-spp
@@ -172,31 +208,27 @@ impl Method {
     pub fn cut_sizes(&self, scene: &Scene, seed: u64, sampler: SamplerSpec) -> Result<Vec<f32>> {
         let settings = RenderSettings { spp: 1, seed, sampler, ..Default::default() };
         let cancel = AtomicBool::new(false);
-        let out = match self {
-            Method::VrlLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
-            Method::VplLightcuts(i) => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
-            _ => bail!("cut sizes need a lightcut method ({})", crate::options::names(MethodKind::LIGHTCUTS)),
-        };
+        let out = each_lightcuts!(
+            self,
+            i => render(scene, &CutSizeProbe(i), &settings, &cancel, |_| {}),
+            _ => bail!("cut sizes need a lightcut method ({})", crate::options::names(MethodKind::LIGHTCUTS))
+        );
         Ok(out.film.mean(None).chunks(3).map(|p| p[0]).collect())
     }
 
-    /// The lightcut method's cut strategy (`None` for other methods).
-    pub fn cut_strategy(&self) -> Option<CutStrategy> {
+    /// The lightcut method's tree cut (`None` for other methods).
+    pub fn tree_cut(&self) -> Option<TreeCut> {
         match self {
-            Method::VrlLightcuts(i) => Some(i.settings.strategy),
-            Method::VplLightcuts(i) => Some(i.settings.strategy),
-            _ => None,
+            Method::VrlLightcuts(_) | Method::VplLightcuts(_) => Some(TreeCut::Stochastic),
+            Method::VrlBoundCut(_) | Method::VplBoundCut(_) => Some(TreeCut::Bound),
+            Method::VolPath(_) | Method::Vrl(_) | Method::Vpl(_) => None,
         }
     }
 
     /// Seconds spent tracing light paths and building light trees, summed over passes, for
     /// lightcut methods (the rest of a render is gathering: the cuts and their lights).
     pub fn trace_and_build_seconds(&self) -> Option<(f64, f64)> {
-        match self {
-            Method::VrlLightcuts(i) => Some((i.trace_seconds(), i.build_seconds())),
-            Method::VplLightcuts(i) => Some((i.trace_seconds(), i.build_seconds())),
-            _ => None,
-        }
+        each_lightcuts!(self, i => Some((i.trace_seconds(), i.build_seconds())), _ => None)
     }
 
     /// `vrl`'s light paths per pass and its camera segment x VRL evaluations so far (each with
@@ -211,11 +243,7 @@ impl Method {
 
     /// Mean number of nodes per cut (per camera segment), for lightcut methods.
     pub fn mean_cut_size(&self) -> Option<f64> {
-        match self {
-            Method::VrlLightcuts(i) => Some(i.cut_statistics().0),
-            Method::VplLightcuts(i) => Some(i.cut_statistics().0),
-            _ => None,
-        }
+        each_lightcuts!(self, i => Some(i.cut_statistics().0), _ => None)
     }
 }
 

@@ -14,7 +14,7 @@
 
 use anyhow::{anyhow, bail, Result};
 use haze_core::{SamplerKind, SamplerSpec};
-use haze_manylight::integrators::{Builder, CutStrategy, LightBudget, LightcutSettings, PathTracedMedia};
+use haze_manylight::integrators::{BoundCut, Builder, LightBudget, PathTracedMedia, StochasticCut};
 use haze_manylight::tree::bound::BoundKind;
 use haze_render::progressive::RenderSettings;
 use haze_scene::Scene;
@@ -583,16 +583,13 @@ pub const OPTIONS: &[OptionSpec] = &[
         scope: Scope::Method,
         example: "bound",
         set: |o, v| {
-            o.method.lightcuts.strategy =
-                if v.word() == "bound" { CutStrategy::Bound } else { CutStrategy::Stochastic }
+            o.method.lightcuts.cut = if v.word() == "bound" { TreeCut::Bound } else { TreeCut::Stochastic }
         },
         get: |o| {
             Some(
-                match o.method.lightcuts.strategy {
-                    CutStrategy::Stochastic => "stochastic",
-                    CutStrategy::Bound => "bound",
-                    // `vrl` and `vpl` (not an option value: they are the methods of their own).
-                    CutStrategy::Exhaustive => "exhaustive",
+                match o.method.lightcuts.cut {
+                    TreeCut::Stochastic => "stochastic",
+                    TreeCut::Bound => "bound",
                 }
                 .into(),
             )
@@ -609,8 +606,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         requires: Some(("cut", "stochastic")),
         scope: Scope::Method,
         example: "2",
-        set: |o, v| o.method.lightcuts.stochastic.cut_size = v.int() as u32,
-        get: |o| Some(o.method.lightcuts.stochastic.cut_size.to_string()),
+        set: |o, v| o.method.lightcuts.stochastic.settings.cut_size = v.int() as u32,
+        get: |o| Some(o.method.lightcuts.stochastic.settings.cut_size.to_string()),
     },
     OptionSpec {
         name: "light_samples",
@@ -624,8 +621,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         requires: Some(("cut", "stochastic")),
         scope: Scope::Method,
         example: "4",
-        set: |o, v| o.method.lightcuts.stochastic.light_samples = v.int() as u32,
-        get: |o| Some(o.method.lightcuts.stochastic.light_samples.to_string()),
+        set: |o, v| o.method.lightcuts.stochastic.settings.light_samples = v.int() as u32,
+        get: |o| Some(o.method.lightcuts.stochastic.settings.light_samples.to_string()),
     },
     OptionSpec {
         name: "epsilon",
@@ -638,8 +635,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         requires: Some(("cut", "bound")),
         scope: Scope::Method,
         example: "0.05",
-        set: |o, v| o.method.lightcuts.cut.epsilon = v.float() as f32,
-        get: |o| Some(o.method.lightcuts.cut.epsilon.to_string()),
+        set: |o, v| o.method.lightcuts.bound.cut.epsilon = v.float() as f32,
+        get: |o| Some(o.method.lightcuts.bound.cut.epsilon.to_string()),
     },
     OptionSpec {
         name: "max_cut",
@@ -651,8 +648,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         requires: Some(("cut", "bound")),
         scope: Scope::Method,
         example: "50",
-        set: |o, v| o.method.lightcuts.cut.max_cut = v.int() as u32,
-        get: |o| Some(o.method.lightcuts.cut.max_cut.to_string()),
+        set: |o, v| o.method.lightcuts.bound.cut.max_cut = v.int() as u32,
+        get: |o| Some(o.method.lightcuts.bound.cut.max_cut.to_string()),
     },
     OptionSpec {
         name: "bound",
@@ -666,7 +663,7 @@ pub const OPTIONS: &[OptionSpec] = &[
         scope: Scope::Method,
         example: "tight",
         set: |o, v| {
-            o.method.lightcuts.bound = match v.word() {
+            o.method.lightcuts.bound.bound = match v.word() {
                 "paper" => BoundKind::Paper,
                 "conservative" => BoundKind::Conservative,
                 _ => BoundKind::Tight,
@@ -674,7 +671,7 @@ pub const OPTIONS: &[OptionSpec] = &[
         },
         get: |o| {
             Some(
-                match o.method.lightcuts.bound {
+                match o.method.lightcuts.bound.bound {
                     BoundKind::Paper => "paper",
                     BoundKind::Conservative => "conservative",
                     BoundKind::Tight => "tight",
@@ -695,12 +692,13 @@ pub const OPTIONS: &[OptionSpec] = &[
         scope: Scope::Method,
         example: "median",
         set: |o, v| {
-            o.method.lightcuts.builder =
-                if v.word() == "median" { Builder::MedianSplit } else { Builder::Agglomerative }
+            let builder = if v.word() == "median" { Builder::MedianSplit } else { Builder::Agglomerative };
+            o.method.lightcuts.stochastic.tree.builder = builder;
+            o.method.lightcuts.bound.tree.builder = builder;
         },
         get: |o| {
             Some(
-                match o.method.lightcuts.builder {
+                match o.method.lightcuts.stochastic.tree.builder {
                     Builder::Agglomerative => "agglomerative",
                     Builder::MedianSplit => "median",
                 }
@@ -732,6 +730,27 @@ pub fn find(name: &str) -> Option<&'static OptionSpec> {
     OPTIONS.iter().find(|o| o.name == name)
 }
 
+/// The `cut` option: which tree cut the lightcut methods make.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TreeCut {
+    /// [`StochasticCut`].
+    #[default]
+    Stochastic,
+    /// [`BoundCut`].
+    Bound,
+}
+
+/// The lightcut methods' options: the cut `cut` names, with both cuts' settings (each option
+/// sets the cut it belongs to; `builder` both).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LightcutOptions {
+    pub cut: TreeCut,
+    /// `cut_size`, `light_samples`, `builder`.
+    pub stochastic: StochasticCut,
+    /// `epsilon`, `max_cut`, `bound`, `builder`.
+    pub bound: BoundCut,
+}
+
 /// Options of the many-light methods (volpath has none). Front ends make them with
 /// [`resolve`], which owns their defaults and checks.
 #[derive(Clone, Debug)]
@@ -744,7 +763,7 @@ pub struct MethodOptions {
     /// Every many-light method: clamp of surface VPL -> surface point connections, the clamped
     /// part recovered by a compensation walk (unbiased).
     pub compensated_clamp: CompensatedClamp,
-    pub lightcuts: LightcutSettings,
+    pub lightcuts: LightcutOptions,
     /// Caustic paths per pass (`None`: one per pixel; 0: the camera continuation instead).
     pub caustic_paths: Option<u64>,
     /// The media the camera walk path-traces instead of gathering in.
@@ -870,7 +889,7 @@ impl Options {
                 vpl_clamp: None,
                 clamp: None,
                 compensated_clamp: CompensatedClamp::Off,
-                lightcuts: LightcutSettings::default(),
+                lightcuts: LightcutOptions::default(),
                 caustic_paths: None,
                 path_traced_media: PathTracedMedia::None,
                 sampler: None,
@@ -1034,7 +1053,7 @@ mod tests {
             assert!(err(VrlLightcuts, &given, Spelling::Keyword).contains(want), "{given:?}");
         }
         let o = resolve(VplLightcuts, &[("cut_size", "3")], Spelling::Keyword).unwrap();
-        assert_eq!(o.method.lightcuts.stochastic.cut_size, 3);
+        assert_eq!(o.method.lightcuts.stochastic.settings.cut_size, 3);
         assert_eq!(
             o.describe(VplLightcuts),
             "vrls=10000 compensated_clamp=auto path_traced_media=heterogeneous cut=stochastic cut_size=3 light_samples=1 \
@@ -1079,16 +1098,15 @@ mod tests {
     fn defaults_are_the_integrators_own() {
         let o = Options::defaults();
         assert_eq!(o.method.budget, LightBudget::Vrls(10_000));
-        let lc = LightcutSettings::default();
-        let CutSettings { epsilon, max_cut } = lc.cut;
-        assert_eq!((o.method.lightcuts.cut.epsilon, o.method.lightcuts.cut.max_cut), (epsilon, max_cut));
-        assert_eq!((o.method.lightcuts.bound, o.method.lightcuts.builder), (lc.bound, lc.builder));
+        let (stochastic, bound) = (StochasticCut::default(), BoundCut::default());
+        let CutSettings { epsilon, max_cut } = bound.cut;
+        let lc = &o.method.lightcuts;
+        assert_eq!((lc.bound.cut.epsilon, lc.bound.cut.max_cut), (epsilon, max_cut));
+        assert_eq!((lc.bound.bound, lc.bound.tree.builder), (bound.bound, bound.tree.builder));
+        assert_eq!(lc.stochastic.tree.builder, stochastic.tree.builder);
         assert_eq!((o.spp, o.time, o.seed, o.spp_per_pass, o.components), (None, None, 0, None, false));
         assert_eq!(o.method.vpl_clamp, None);
-        assert_eq!(
-            (o.method.lightcuts.strategy, o.method.lightcuts.stochastic),
-            (lc.strategy, lc.stochastic)
-        );
+        assert_eq!((lc.cut, lc.stochastic.settings), (TreeCut::Stochastic, stochastic.settings));
         // Giving a default explicitly changes nothing (beside the option's requirement).
         for spec in OPTIONS {
             if let Default::Value(d) = spec.default {
@@ -1107,8 +1125,8 @@ mod tests {
         let o =
             ok(VrlLightcuts, &[("vrls", "100k"), ("epsilon", "0.1"), ("max_cut", "7"), ("bound", "tight")]);
         assert_eq!(o.method.budget, LightBudget::Vrls(100_000));
-        assert_eq!((o.method.lightcuts.cut.epsilon, o.method.lightcuts.cut.max_cut), (0.1, 7));
-        assert_eq!(o.method.lightcuts.bound, BoundKind::Tight);
+        assert_eq!((o.method.lightcuts.bound.cut.epsilon, o.method.lightcuts.bound.cut.max_cut), (0.1, 7));
+        assert_eq!(o.method.lightcuts.bound.bound, BoundKind::Tight);
         // Every word of a choice is a value of its own.
         for spec in OPTIONS {
             if let Kind::Choice(words) = spec.kind {

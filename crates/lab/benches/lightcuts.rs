@@ -108,7 +108,7 @@ fn lightcuts_tables(args: &Args, path: &Path) -> Result<()> {
         }
     }
     let base = setup::options(MethodKind::VrlLightcuts, &given)?;
-    let cut = base.method.lightcuts.cut;
+    let cut = base.method.lightcuts.bound.cut;
     let bound_name = find("bound").and_then(|b| b.value_in(&base)).unwrap_or_default();
     let defaults = BuildSettings::default();
     let build_settings = BuildSettings { radius: args.ploc_radius.unwrap_or(defaults.radius), ..defaults };
@@ -147,8 +147,8 @@ fn lightcuts_tables(args: &Args, path: &Path) -> Result<()> {
                     let mut given = given.clone();
                     given.extend([("light_paths", paths.as_str()), ("builder", builder)]);
                     let mut options = setup::options(MethodKind::VrlLightcuts, &given)?;
-                    options.method.lightcuts.build = build_settings;
-                    let integ = setup::vrl_lightcuts(&scene, &options)?;
+                    options.method.lightcuts.bound.tree.build = build_settings;
+                    let integ = setup::vrl_bound_cut(&scene, &options)?;
                     let settings = RenderSettings { spp: 1, ..Default::default() };
                     let out = haze_render::progressive::render(
                         &scene,
@@ -228,7 +228,7 @@ fn cut_growth() -> Result<()> {
         for bound in ["paper", "tight"] {
             let given =
                 [("cut", "bound"), ("bound", bound), ("max_cut", no_limit.as_str()), ("vrls", vrls.as_str())];
-            let integ = setup::vrl_lightcuts(&scene, &setup::options(MethodKind::VrlLightcuts, &given)?)?;
+            let integ = setup::vrl_bound_cut(&scene, &setup::options(MethodKind::VrlLightcuts, &given)?)?;
             let settings = RenderSettings { spp: 1, ..Default::default() };
             let out =
                 haze_render::progressive::render(&scene, &integ, &settings, &AtomicBool::new(false), |_| {});

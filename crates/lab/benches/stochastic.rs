@@ -58,7 +58,7 @@ fn main() -> Result<()> {
         given.push(("cut_size", k));
     }
     let base = setup::options(MethodKind::VrlLightcuts, &given)?;
-    let (spp, cut_size) = (base.spp.unwrap_or(16), base.method.lightcuts.stochastic.cut_size);
+    let (spp, cut_size) = (base.spp.unwrap_or(16), base.method.lightcuts.stochastic.settings.cut_size);
     for path in &scenes {
         let scene = setup::load_scene(path, &args.define)?;
         println!(

@@ -61,7 +61,7 @@ fn main() {
         let mut options = setup::options(MethodKind::VrlLightcuts, &[("vrls", &vrls)])
             .unwrap_or_else(|e| fail(&format!("{e:#}")));
         if let Some(a) = share {
-            options.method.lightcuts.stochastic.power_share = a;
+            options.method.lightcuts.stochastic.settings.power_share = a;
         }
         let integrator =
             setup::vrl_lightcuts(&scene, &options).unwrap_or_else(|e| fail(&format!("{path}: {e:#}")));

@@ -4,7 +4,7 @@
 use anyhow::{anyhow, bail, Context, Result};
 use haze_engine::options::{resolve, MethodKind, Options, Spelling};
 use haze_engine::Method;
-use haze_manylight::integrators::{LightcutsIntegrator, Vrls};
+use haze_manylight::integrators::{BoundCut, LightcutsIntegrator, StochasticCut, Vrls};
 use haze_scene::{LoadOptions, Scene};
 use std::path::{Path, PathBuf};
 
@@ -53,11 +53,21 @@ pub fn options(kind: MethodKind, given: &[(&str, &str)]) -> Result<Options> {
     resolve(kind, given, Spelling::Flag)
 }
 
-/// `vrl_lightcuts` for `scene` with `options` (seed 0), built by the engine.
-pub fn vrl_lightcuts(scene: &Scene, options: &Options) -> Result<LightcutsIntegrator<Vrls>> {
+/// `vrl_lightcuts` with the stochastic cut for `scene` with `options` (seed 0), built by the
+/// engine.
+pub fn vrl_lightcuts(scene: &Scene, options: &Options) -> Result<LightcutsIntegrator<Vrls, StochasticCut>> {
     match Method::build(scene, MethodKind::VrlLightcuts, &options.method, 0)? {
         Method::VrlLightcuts(i) => Ok(i),
-        _ => Err(anyhow!("the engine built another method for vrl_lightcuts")),
+        _ => Err(anyhow!("vrl_lightcuts with cut=stochastic expected (options give another cut)")),
+    }
+}
+
+/// `vrl_lightcuts` with the bound cut (`cut=bound` in `options`) for `scene` (seed 0), built by
+/// the engine.
+pub fn vrl_bound_cut(scene: &Scene, options: &Options) -> Result<LightcutsIntegrator<Vrls, BoundCut>> {
+    match Method::build(scene, MethodKind::VrlLightcuts, &options.method, 0)? {
+        Method::VrlBoundCut(i) => Ok(i),
+        _ => Err(anyhow!("vrl_lightcuts with cut=bound expected (options give another cut)")),
     }
 }
 

@@ -96,7 +96,7 @@ fn light_path_count_does_not_change_the_expected_image() {
 /// against the brute-force `vrl`/`vpl` with the same light-path count, component `multiple`
 /// (the virtual lights' part), for cut sizes 1 (the default), 4 and 16.
 fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
-    use haze_manylight::integrators::LightcutSettings;
+    use haze_manylight::integrators::StochasticCut;
     use haze_manylight::tree::stochastic::StochasticSettings;
     let scene = load_small(name);
     let ml = settings(&scene, paths);
@@ -105,8 +105,8 @@ fn check_stochastic_against_brute_force(name: &str, paths: u64, passes: u32) {
     let vpl = render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml, 22).unwrap(), passes, 1, 22);
     let mut failures = Vec::new();
     for cut_size in [1, 4, 16] {
-        let lc = LightcutSettings {
-            stochastic: StochasticSettings { cut_size, ..Default::default() },
+        let lc = StochasticCut {
+            settings: StochasticSettings { cut_size, ..Default::default() },
             ..Default::default()
         };
         let seed = 30 + cut_size as u64;
@@ -134,13 +134,13 @@ fn hg_box_stochastic_lightcuts_match_brute_force() {
 /// z-test with haze's variance over passes (the reference's 16384-spp noise added as in
 /// haze-render's validation test) and the image-mean z from the per-pass spread.
 fn check_stochastic_against_mitsuba(name: &str, paths: u64, passes: u32) {
-    use haze_manylight::integrators::LightcutSettings;
+    use haze_manylight::integrators::StochasticCut;
     use haze_render::image_io::RgbImage;
     let reference = RgbImage::read_exr(&haze_testkit::data::validation(&format!("refs/{name}.exr")))
         .expect("reference EXR");
     let scene = load_file(&validation_scene(name), &LoadOptions::default()).expect("validation scene loads");
     let (w, h) = (reference.width, reference.height);
-    let (a, b) = lightcut_renders(&scene, paths, passes, LightcutSettings::default(), [41, 42]);
+    let (a, b) = lightcut_renders(&scene, paths, passes, StochasticCut::default(), [41, 42]);
     let mut failures = Vec::new();
     for (method, f) in [("vrl_lightcuts", &a), ("vpl_lightcuts", &b)] {
         let sample_var = pool_variance(&f.film.sample_variance(None), w, h, 3);
@@ -298,10 +298,10 @@ fn peer_cbox_whole_image_matches_volpath() {
 /// the surface component present (walls lit).
 #[test]
 fn glass_beam_renders_with_every_integrator_without_nan() {
-    use haze_manylight::integrators::{LightcutSettings, LightcutsIntegrator, Vpls, Vrls};
+    use haze_manylight::integrators::{LightcutsIntegrator, StochasticCut, Vpls, Vrls};
     let mut scene = load_small_path(&haze_testkit::data::repo_root().join("scenes/glass-beam.xml"));
     (scene.camera.width, scene.camera.height) = (16, 12);
-    let (ml, lc) = (settings(&scene, 20), LightcutSettings::default());
+    let (ml, lc) = (settings(&scene, 20), StochasticCut::default());
     let films = [
         render_passes(&scene, &VolPath::from_spec(&scene.integrator), 1, 4, 1).film,
         render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 1).unwrap(), 4, 1, 1).film,
@@ -518,16 +518,12 @@ fn caustic_paths_match_the_camera_continuation_in_smoke() {
 /// default `epsilon` it agrees with them by the per-pixel z-test on `multiple`.
 #[test]
 fn smoke_bound_cut_matches_brute_force() {
-    use haze_manylight::integrators::{CutStrategy, LightcutSettings};
+    use haze_manylight::integrators::BoundCut;
     use haze_manylight::tree::cut::CutSettings;
     let scene = smoke_scene(true, 0.0);
     let paths = 20;
     let ml = settings(&scene, paths);
-    let exhaustive = LightcutSettings {
-        strategy: CutStrategy::Bound,
-        cut: CutSettings { epsilon: 0.0, max_cut: u32::MAX },
-        ..Default::default()
-    };
+    let exhaustive = BoundCut { cut: CutSettings { epsilon: 0.0, max_cut: u32::MAX }, ..Default::default() };
     let (a, b) = lightcut_renders(&scene, paths, 2, exhaustive, [9, 9]);
     let vrl = render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 9).unwrap(), 2, 1, 9);
     let vpl = render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml.clone(), 9).unwrap(), 2, 1, 9);
@@ -543,13 +539,7 @@ fn smoke_bound_cut_matches_brute_force() {
     }
     let (paths, passes) = (60, 48);
     let ml = settings(&scene, paths);
-    let (a, b) = lightcut_renders(
-        &scene,
-        paths,
-        passes,
-        LightcutSettings { strategy: CutStrategy::Bound, ..Default::default() },
-        [11, 12],
-    );
+    let (a, b) = lightcut_renders(&scene, paths, passes, BoundCut::default(), [11, 12]);
     let vrl =
         render_passes(&scene, &VrlIntegrator::exhaustive(&scene, ml.clone(), 13).unwrap(), passes, 1, 13);
     let vpl = render_passes(&scene, &VplIntegrator::exhaustive(&scene, ml, 14).unwrap(), passes, 1, 14);

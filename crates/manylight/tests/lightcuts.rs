@@ -10,7 +10,7 @@
 //!   tests, with no extra tolerance.
 
 use haze_manylight::integrators::{
-    CutStrategy, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings, PathTracedMedia,
+    BoundCut, CutStrategy, LightBudget, LightcutsIntegrator, ManyLightSettings, PathTracedMedia,
     VplIntegrator, Vpls, VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
@@ -64,14 +64,12 @@ fn z_test_multiple(a: &Film, b: &Film, w: usize, h: usize) -> ZTestReport {
 fn exhaustive_cut_reproduces_brute_force() {
     for name in ["hg-box", "foggy-room"] {
         let scene = load_small(name, 16, 12);
-        let exhaustive = LightcutSettings {
-            strategy: CutStrategy::Bound,
-            cut: CutSettings { epsilon: 0.0, max_cut: u32::MAX },
-            ..Default::default()
-        };
+        let exhaustive =
+            BoundCut { cut: CutSettings { epsilon: 0.0, max_cut: u32::MAX }, ..Default::default() };
         for kind in ["vrl", "vpl"] {
             let (a, b, summary) = if kind == "vrl" {
-                let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, 200), exhaustive, 9).unwrap();
+                let lc = LightcutsIntegrator::<Vrls, BoundCut>::new(&scene, ml(&scene, 200), exhaustive, 9)
+                    .unwrap();
                 let a = film(&scene, &lc, 2, 9);
                 (
                     a,
@@ -79,7 +77,8 @@ fn exhaustive_cut_reproduces_brute_force() {
                     lc.summary(),
                 )
             } else {
-                let lc = LightcutsIntegrator::<Vpls>::new(&scene, ml(&scene, 200), exhaustive, 9).unwrap();
+                let lc = LightcutsIntegrator::<Vpls, BoundCut>::new(&scene, ml(&scene, 200), exhaustive, 9)
+                    .unwrap();
                 let a = film(&scene, &lc, 2, 9);
                 let b = film(&scene, &VplIntegrator::exhaustive(&scene, ml(&scene, 200), 9).unwrap(), 2, 9);
                 (a, b, lc.summary())
@@ -100,15 +99,15 @@ fn exhaustive_cut_reproduces_brute_force() {
 /// `vrl_lightcuts` with `settings` against brute-force `vrl` on the 24x18 `name` scene, `paths`
 /// light paths and `passes` passes each: the multiple-scattering images agree by the per-pixel
 /// z-test. Returns the lightcut integrator for its statistics.
-fn assert_lightcuts_match_vrl(
+fn assert_lightcuts_match_vrl<S: CutStrategy>(
     name: &str,
     paths: u64,
     passes: u32,
-    settings: LightcutSettings,
+    settings: S,
     label: &str,
-) -> LightcutsIntegrator<Vrls> {
+) -> LightcutsIntegrator<Vrls, S> {
     let scene = load_small(name, 24, 18);
-    let lc = LightcutsIntegrator::<Vrls>::new(&scene, ml(&scene, paths), settings, 5).unwrap();
+    let lc = LightcutsIntegrator::<Vrls, S>::new(&scene, ml(&scene, paths), settings, 5).unwrap();
     let a = film(&scene, &lc, passes, 5);
     let b = film(&scene, &VrlIntegrator::exhaustive(&scene, ml(&scene, paths), 6).unwrap(), passes, 6);
     let r = z_test_multiple(&a, &b, 24, 18);
@@ -122,7 +121,7 @@ fn assert_lightcuts_match_vrl(
 
 #[test]
 fn bound_cut_default_epsilon_agrees_with_brute_force() {
-    let settings = LightcutSettings { strategy: CutStrategy::Bound, ..Default::default() };
+    let settings = BoundCut::default();
     assert_lightcuts_match_vrl("foggy-room", 300, 64, settings, "eps 0.02");
 }
 
@@ -132,8 +131,7 @@ fn bound_cut_default_epsilon_agrees_with_brute_force() {
 #[test]
 fn tight_bound_agrees_with_brute_force() {
     use haze_manylight::tree::bound::BoundKind;
-    let settings =
-        LightcutSettings { strategy: CutStrategy::Bound, bound: BoundKind::Tight, ..Default::default() };
+    let settings = BoundCut { bound: BoundKind::Tight, ..Default::default() };
     let lc = assert_lightcuts_match_vrl("hg-box", 4000, 48, settings, "tight bound");
     // The cut must actually cut: fewer nodes than lights on average.
     let (mean_cut, _, _) = lc.cut_statistics();

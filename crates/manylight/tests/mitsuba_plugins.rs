@@ -58,7 +58,8 @@ fn renders(scene: &Scene) -> Vec<(&'static str, Passes)> {
     let ml = settings(scene, PATHS);
     let vrl = render_passes(scene, &VrlIntegrator::exhaustive(scene, ml.clone(), 1).unwrap(), PASSES, 1, 1);
     let vpl = render_passes(scene, &VplIntegrator::exhaustive(scene, ml, 2).unwrap(), PASSES, 1, 2);
-    let (vrl_lc, vpl_lc) = lightcut_renders(scene, PATHS, PASSES, Default::default(), [5, 6]);
+    let (vrl_lc, vpl_lc) =
+        lightcut_renders(scene, PATHS, PASSES, haze_manylight::integrators::StochasticCut::default(), [5, 6]);
     vec![("vrl", vrl), ("vpl", vpl), ("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]
 }
 

@@ -31,8 +31,8 @@ mod compare_support;
 mod rule;
 
 use haze_manylight::integrators::{
-    scene_compensated_clamp, LightBudget, LightcutSettings, LightcutsIntegrator, ManyLightSettings,
-    PathTracedMedia, Vrls,
+    scene_compensated_clamp, LightBudget, LightcutsIntegrator, ManyLightSettings, PathTracedMedia,
+    StochasticCut, Vrls,
 };
 use haze_render::progressive::{render, RenderSettings};
 use haze_scene::{load_file, LoadOptions};
@@ -64,7 +64,7 @@ fn suite(scene: &str) {
         compensated_clamp: clamp,
         ..compare_support::settings(&scene, 1)
     };
-    let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, LightcutSettings::default(), 0)
+    let integrator = LightcutsIntegrator::<Vrls>::new(&scene, ml, StochasticCut::default(), 0)
         .unwrap_or_else(|e| panic!("{stem}: vrl_lightcuts refuses the scene: {e}"));
     let settings = RenderSettings { spp, seed: 0, spp_per_pass: 1, ..Default::default() };
     let out = render(&scene, &integrator, &settings, &AtomicBool::new(false), |_| {});

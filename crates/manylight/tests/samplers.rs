@@ -10,7 +10,7 @@ mod compare_support;
 use compare_support::{judge, paired_z, render_passes_with, settings, Passes};
 use haze_core::{SamplerKind, SamplerSpec};
 use haze_manylight::integrators::{
-    LightcutsIntegrator, ManyLightSettings, VplIntegrator, Vpls, VrlIntegrator, Vrls,
+    LightcutsIntegrator, ManyLightSettings, StochasticCut, VplIntegrator, Vpls, VrlIntegrator, Vrls,
 };
 use haze_render::{Component, Integrator};
 use haze_scene::{load_file, LoadOptions, Scene};
@@ -40,7 +40,7 @@ fn render(
     fn go<I: Integrator>(s: &Scene, i: I, p: u32, n: u32, seed: u64, spec: SamplerSpec) -> Passes {
         render_passes_with(s, &i, p, n, seed, spec)
     }
-    let lc = Default::default();
+    let lc = StochasticCut::default();
     match method {
         "vrl" => go(
             scene,

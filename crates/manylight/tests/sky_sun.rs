@@ -61,7 +61,8 @@ fn checked_reference(scene: &Scene, label: &str, present: &[Component]) -> Passe
 /// scaled by 0.9 must fail the comparison with `reference` on `multiple` or `surface` (asserted
 /// when `assert`).
 fn check_control(scene: &Scene, reference: &Passes, label: &str, paths: u64, passes: u32, assert: bool) {
-    let (mut wrong, _) = lightcut_renders(scene, paths, passes, Default::default(), [5, 6]);
+    let (mut wrong, _) =
+        lightcut_renders(scene, paths, passes, haze_manylight::integrators::StochasticCut::default(), [5, 6]);
     wrong.film.scale(0.9);
     for m in &mut wrong.pass_means {
         for v in m.iter_mut().flatten() {

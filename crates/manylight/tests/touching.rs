@@ -19,8 +19,8 @@
 //! conservative).
 
 use haze_manylight::integrators::{
-    LightBudget, LightcutsIntegrator, ManyLightSettings, PathTracedMedia, VplIntegrator, Vpls, VrlIntegrator,
-    Vrls,
+    LightBudget, LightcutsIntegrator, ManyLightSettings, PathTracedMedia, StochasticCut, VplIntegrator, Vpls,
+    VrlIntegrator, Vrls,
 };
 use haze_manylight::lighttrace::LightTraceSettings;
 use haze_render::progressive::{render, RenderSettings};
@@ -105,7 +105,7 @@ fn render_with(scene: &Scene, method: &str, spp: u32, paths: u64, seed: u64) -> 
         compensated_clamp: None,
         path_traced_media: PathTracedMedia::None,
     };
-    let lc = Default::default();
+    let lc = StochasticCut::default();
     match method {
         "volpath" => render_passes(scene, &VolPath::from_spec(&scene.integrator), 16, spp, seed),
         "vrl" => render_passes(scene, &VrlIntegrator::exhaustive(scene, ml, seed).unwrap(), 48, 1, seed),

@@ -11,14 +11,15 @@ mod lightcuts;
 #[cfg(feature = "test-controls")]
 pub use lightcuts::TestControls;
 pub use lightcuts::{
-    Builder, Clamps, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, Forest, LightcutPass,
-    LightcutSettings, LightcutsIntegrator, Observed, SegmentCut, Vpls, Vrls,
+    BoundCut, Builder, Clamps, ClusterKind, CutObserver, CutSizeProbe, CutStrategy, ExhaustiveCut, Forest,
+    LightcutPass, LightcutsIntegrator, Observed, PassView, SegmentCut, StochasticCut, TreeSettings, Vpls,
+    Vrls,
 };
 
-/// `vrl` ([`LightcutsIntegrator::exhaustive`]) and `vrl_lightcuts`.
-pub type VrlIntegrator = LightcutsIntegrator<Vrls>;
-/// `vpl` ([`LightcutsIntegrator::exhaustive`]) and `vpl_lightcuts`.
-pub type VplIntegrator = LightcutsIntegrator<Vpls>;
+/// `vrl` ([`LightcutsIntegrator::exhaustive`]).
+pub type VrlIntegrator = LightcutsIntegrator<Vrls, ExhaustiveCut>;
+/// `vpl` ([`LightcutsIntegrator::exhaustive`]).
+pub type VplIntegrator = LightcutsIntegrator<Vpls, ExhaustiveCut>;
 
 use crate::camera::{estimator_medium, CameraSegment};
 pub use crate::gather::PathTracedMedia;

@@ -200,7 +200,13 @@ pub fn check_methods_with(
     let vpl = render_passes(scene, &VplIntegrator::exhaustive(scene, ml.clone(), 2).unwrap(), passes, 1, 2);
     let mut methods = vec![("vrl", vrl), ("vpl", vpl)];
     if lightcuts {
-        let (vrl_lc, vpl_lc) = lightcut_renders_with(scene, ml, passes, Default::default(), [5, 6]);
+        let (vrl_lc, vpl_lc) = lightcut_renders_with(
+            scene,
+            ml,
+            passes,
+            haze_manylight::integrators::StochasticCut::default(),
+            [5, 6],
+        );
         methods.extend([("vrl_lightcuts", vrl_lc), ("vpl_lightcuts", vpl_lc)]);
     }
     let mut failures = Vec::new();
@@ -219,31 +225,31 @@ pub fn lightcut_renders(
     scene: &Scene,
     paths: u64,
     passes: u32,
-    lc: haze_manylight::integrators::LightcutSettings,
+    lc: impl haze_manylight::integrators::CutStrategy,
     seeds: [u64; 2],
 ) -> (Passes, Passes) {
     lightcut_renders_with(scene, &settings(scene, paths), passes, lc, seeds)
 }
 
 /// [`lightcut_renders`] with the many-light settings `ml`.
-pub fn lightcut_renders_with(
+pub fn lightcut_renders_with<S: haze_manylight::integrators::CutStrategy>(
     scene: &Scene,
     ml: &ManyLightSettings,
     passes: u32,
-    lc: haze_manylight::integrators::LightcutSettings,
+    lc: S,
     seeds: [u64; 2],
 ) -> (Passes, Passes) {
     use haze_manylight::integrators::{LightcutsIntegrator, Vpls, Vrls};
     let a = render_passes(
         scene,
-        &LightcutsIntegrator::<Vrls>::new(scene, ml.clone(), lc, seeds[0]).unwrap(),
+        &LightcutsIntegrator::<Vrls, S>::new(scene, ml.clone(), lc.clone(), seeds[0]).unwrap(),
         passes,
         1,
         seeds[0],
     );
     let b = render_passes(
         scene,
-        &LightcutsIntegrator::<Vpls>::new(scene, ml.clone(), lc, seeds[1]).unwrap(),
+        &LightcutsIntegrator::<Vpls, S>::new(scene, ml.clone(), lc, seeds[1]).unwrap(),
         passes,
         1,
         seeds[1],

@@ -1,12 +1,12 @@
 //! Randomized property test of the bound cut's bound in heterogeneous media (`docs/theory.md`
 //! §12.5, "The bound cut"): every sampled contribution of every light below a node stays below
-//! the node's bound, with the bound context the cut itself uses ([`LightcutsIntegrator::bound_context`])
+//! the node's bound, with the bound context the cut itself uses ([`BoundCut::context`])
 //! and the heterogeneous estimators (ratio tracking, the distance mixture (T35)).
 
 use super::*;
 use crate::integrators::{LightBudget, PathTracedMedia};
 use crate::lighttrace::LightTraceSettings;
-use crate::tree::bound::for_each_light;
+use crate::tree::bound::{for_each_light, BoundKind};
 use crate::vrl::Segment;
 use glam::Vec3;
 use haze_scene::volume::Grid;
@@ -64,8 +64,8 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
         compensated_clamp: None,
         path_traced_media: PathTracedMedia::None,
     };
-    let settings = LightcutSettings { strategy: CutStrategy::Bound, bound: kind, ..Default::default() };
-    let lc = LightcutsIntegrator::<K>::new(scene, ml, settings, seed).unwrap();
+    let settings = BoundCut { bound: kind, ..Default::default() };
+    let lc = LightcutsIntegrator::<K, BoundCut>::new(scene, ml, settings, seed).unwrap();
     let mut pass = lc.begin_pass(scene, seed, 0);
     for f in &mut pass.bound_factors {
         *f *= camera_scale;
@@ -86,7 +86,7 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
         let node = &nodes[index as usize];
         let seg = near_segment(&mut s, node, case, lo, hi);
         let cs = CameraSegment { seg, medium: 0, tr_before: Rgb::ONE, events: 0 };
-        let ctx = lc.bound_context(&pass, &cs);
+        let ctx = lc.strategy.context(&pass, &cs);
         let b = K::bound(&ctx, forest, index);
         let mut lights = Vec::new();
         for_each_light(&forest.tree, node, |l| lights.push(l));

@@ -280,22 +280,23 @@ impl LightKind for Vpls {
         index: u32,
         clamps: &Clamps,
     ) -> Rgb {
-        if !crate::depth::connects(scene, vpl.events, cs.events) {
-            return Rgb::ZERO;
+        vpl_to_segment(scene, crate::hetero::any(scene), cs, media, vpl, key, index, clamps)
+    }
+    /// The scene's media asked once per sum, not once per light.
+    fn contribution_sum(
+        scene: &Scene,
+        cs: &CameraSegment,
+        media: &[VrlMedium],
+        lights: &[Vpl],
+        key: u64,
+        clamps: &Clamps,
+    ) -> Rgb {
+        let hetero = crate::hetero::any(scene);
+        let mut sum = Rgb::ZERO;
+        for (i, vpl) in lights.iter().enumerate() {
+            sum += vpl_to_segment(scene, hetero, cs, media, vpl, key, i as u32, clamps);
         }
-        if crate::hetero::any(scene) {
-            let u = light_uniforms(key, index);
-            return crate::hetero::vpl_to_segment(scene, cs, media, vpl, u, clamps.vpl);
-        }
-        sample_vpl_contribution(
-            &cs.seg,
-            &media[cs.medium as usize],
-            vpl,
-            &media[vpl.medium as usize].phase,
-            light_uniforms(key, index).x,
-            clamps.vpl,
-            |y, x| connect(scene, vpl.medium, y, x),
-        )
+        sum
     }
     fn to_point(
         scene: &Scene,
@@ -307,6 +308,37 @@ impl LightKind for Vpls {
     ) -> Rgb {
         medium_vpl_to_point(scene, vpl, gp, media, clamps.surface)
     }
+}
+
+/// [`Vpls`]' `contribution`, with `hetero = crate::hetero::any(scene)` given.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn vpl_to_segment(
+    scene: &Scene,
+    hetero: bool,
+    cs: &CameraSegment,
+    media: &[VrlMedium],
+    vpl: &Vpl,
+    key: u64,
+    index: u32,
+    clamps: &Clamps,
+) -> Rgb {
+    if !crate::depth::connects(scene, vpl.events, cs.events) {
+        return Rgb::ZERO;
+    }
+    if hetero {
+        let u = light_uniforms(key, index);
+        return crate::hetero::vpl_to_segment(scene, cs, media, vpl, u, clamps.vpl);
+    }
+    sample_vpl_contribution(
+        &cs.seg,
+        &media[cs.medium as usize],
+        vpl,
+        &media[vpl.medium as usize].phase,
+        light_uniforms(key, index).x,
+        clamps.vpl,
+        |y, x| connect(scene, vpl.medium, y, x),
+    )
 }
 
 /// Surface VPLs (`docs/theory.md` §2.1, (T12c) and (T12d)), in every many-light method's pass.

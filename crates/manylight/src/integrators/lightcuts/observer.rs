@@ -2,7 +2,7 @@
 //! (`haze-lab`'s selection-variance probe), rendered through [`Observed`]. Renders pass `()`,
 //! whose empty method the compiler removes: the shipped integrator checks nothing per segment.
 
-use super::{ClusterKind, Forest, LightcutGather, LightcutPass, LightcutsIntegrator};
+use super::{ClusterKind, CutStrategy, Forest, LightcutGather, LightcutPass, LightcutsIntegrator};
 use crate::camera::CameraSegment;
 use crate::gather::whole_path_radiance;
 use crate::tree::stochastic::SampleNode;
@@ -41,12 +41,12 @@ impl<K: ClusterKind> CutObserver<K> for () {
 
 /// `integrator` with `observer` shown each stochastic cut of a camera segment: an integrator
 /// whose image is `integrator`'s, bit for bit.
-pub struct Observed<'a, K: ClusterKind, O> {
-    pub integrator: &'a LightcutsIntegrator<K>,
+pub struct Observed<'a, K: ClusterKind, S: CutStrategy, O> {
+    pub integrator: &'a LightcutsIntegrator<K, S>,
     pub observer: &'a O,
 }
 
-impl<K: ClusterKind, O: CutObserver<K>> Integrator for Observed<'_, K, O> {
+impl<K: ClusterKind, S: CutStrategy, O: CutObserver<K>> Integrator for Observed<'_, K, S, O> {
     type PassData = LightcutPass<K>;
 
     fn name(&self) -> &str {
@@ -69,7 +69,7 @@ impl<K: ClusterKind, O: CutObserver<K>> Integrator for Observed<'_, K, O> {
         medium: Option<MediumId>,
         sampler: &mut Sampler,
     ) -> PathRadiance {
-        let gather = LightcutGather { integrator: self.integrator, scene, pass, observer: self.observer };
+        let gather = LightcutGather::new(self.integrator, scene, pass, self.observer);
         whole_path_radiance(scene, ray, medium, sampler, &gather)
     }
 }
