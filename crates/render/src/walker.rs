@@ -73,11 +73,6 @@ impl Walker {
         Walker { camera_ray: true, ..Walker::new(ray, medium) }
     }
 
-    /// Whether the next query is still the camera ray's.
-    pub fn at_camera(&self) -> bool {
-        self.camera_ray
-    }
-
     /// Counts one more vertex; false once the walk has visited [`MAX_WALK_VERTICES`] (it must
     /// end).
     #[inline]
