@@ -292,7 +292,9 @@ impl Scene {
     }
 
     /// [`Self::intersect_preliminary`] for a ray that cannot hit what `leaving` names
-    /// ([`Self::leaving`]): the same answer, the BVH skipping that shape.
+    /// ([`Self::leaving`]): the same answer, the BVH skipping that shape. Always inlined, as
+    /// [`Accel::intersect_preliminary_leaving`] is (why there).
+    #[inline(always)]
     pub fn intersect_preliminary_leaving(&self, ray: &Ray, leaving: Leaving) -> Option<PreliminaryHit> {
         self.accel.intersect_preliminary_leaving(ray, leaving)
     }
