@@ -145,10 +145,13 @@ pub(crate) fn surface_vpls(set: &LightSet) -> Vec<crate::vpl::SurfaceVpl> {
 
 /// Surface VPL `vpl` (index `i` of its pass) -> camera segment (T12c), with its own random
 /// number from `key` (`SURFACE_VPL_INDEX`): the brute-force sum and the lightcut integrators'
-/// power-sampled sum evaluate the same term.
+/// power-sampled sum evaluate the same term. `hetero` is `crate::hetero::any(scene)`, asked once
+/// by the caller.
+#[allow(clippy::too_many_arguments)]
 #[inline]
 pub(crate) fn surface_vpl_to_segment(
     scene: &Scene,
+    hetero: bool,
     vpl: &crate::vpl::SurfaceVpl,
     i: usize,
     cs: &CameraSegment,
@@ -159,7 +162,7 @@ pub(crate) fn surface_vpl_to_segment(
     if !crate::depth::connects(scene, vpl.events, cs.events) {
         return haze_core::Rgb::ZERO;
     }
-    if crate::hetero::any(scene) {
+    if hetero {
         let u = light_uniforms(key, SURFACE_VPL_INDEX | i as u32);
         return crate::hetero::surface_vpl_to_segment(scene, vpl, cs, cam_medium, u, clamp);
     }

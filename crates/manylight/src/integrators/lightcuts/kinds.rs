@@ -60,7 +60,7 @@ pub trait LightKind: Sized + Send + Sync + 'static {
         key: u64,
         clamps: &Clamps,
     ) -> Rgb {
-        each_contribution::<Self>(scene, cs, media, lights, key, clamps)
+        sum_each(lights, |light, i| Self::contribution(scene, cs, media, light, key, i, clamps))
     }
     /// One sampled contribution of `light` to the gathering surface point `gp` (unbiased
     /// unless `clamps` clamps its `1/d^2`; `docs/theory.md` §5.1, §5.3).
@@ -74,19 +74,14 @@ pub trait LightKind: Sized + Send + Sync + 'static {
     ) -> Rgb;
 }
 
-/// `sum_i K::contribution(.., lights[i], key, i, ..)`, one light after the other: the exhaustive
-/// cut's sum as [`LightKind::contribution_sum`] defines it.
-fn each_contribution<K: LightKind>(
-    scene: &Scene,
-    cs: &CameraSegment,
-    media: &[VrlMedium],
-    lights: &[K::Light],
-    key: u64,
-    clamps: &Clamps,
-) -> Rgb {
+/// `sum_i f(lights[i], i)`, one light after the other from zero: the order in which
+/// [`LightKind::contribution_sum`] defines the exhaustive cut's sum (a kind that hoists a
+/// per-sum question out of `contribution` passes its own `f`).
+#[inline]
+fn sum_each<L>(lights: &[L], mut f: impl FnMut(&L, u32) -> Rgb) -> Rgb {
     let mut sum = Rgb::ZERO;
     for (i, light) in lights.iter().enumerate() {
-        sum += K::contribution(scene, cs, media, light, key, i as u32, clamps);
+        sum += f(light, i as u32);
     }
     sum
 }
@@ -196,7 +191,7 @@ impl LightKind for Vrls {
         /// Lights sampled back to back before their contributions are evaluated.
         const CHUNK: usize = 16;
         if crate::hetero::any(scene) {
-            return each_contribution::<Self>(scene, cs, media, lights, key, clamps);
+            return sum_each(lights, |vrl, i| Self::contribution(scene, cs, media, vrl, key, i, clamps));
         }
         let (cam, cam_medium) = (&cs.seg, &media[cs.medium as usize]);
         let mut sum = Rgb::ZERO;
@@ -292,11 +287,7 @@ impl LightKind for Vpls {
         clamps: &Clamps,
     ) -> Rgb {
         let hetero = crate::hetero::any(scene);
-        let mut sum = Rgb::ZERO;
-        for (i, vpl) in lights.iter().enumerate() {
-            sum += vpl_to_segment(scene, hetero, cs, media, vpl, key, i as u32, clamps);
-        }
-        sum
+        sum_each(lights, |vpl, i| vpl_to_segment(scene, hetero, cs, media, vpl, key, i, clamps))
     }
     fn to_point(
         scene: &Scene,
@@ -369,8 +360,22 @@ impl LightKind for SurfaceVpls {
         index: u32,
         clamps: &Clamps,
     ) -> Rgb {
-        let cam_medium = &media[cs.medium as usize];
-        surface_vpl_to_segment(scene, vpl, index as usize, cs, cam_medium, key, clamps.surface)
+        let (hetero, cam_medium) = (crate::hetero::any(scene), &media[cs.medium as usize]);
+        surface_vpl_to_segment(scene, hetero, vpl, index as usize, cs, cam_medium, key, clamps.surface)
+    }
+    /// The scene's media asked once per sum, not once per light.
+    fn contribution_sum(
+        scene: &Scene,
+        cs: &CameraSegment,
+        media: &[VrlMedium],
+        lights: &[SurfaceVpl],
+        key: u64,
+        clamps: &Clamps,
+    ) -> Rgb {
+        let (hetero, cam_medium) = (crate::hetero::any(scene), &media[cs.medium as usize]);
+        sum_each(lights, |vpl, i| {
+            surface_vpl_to_segment(scene, hetero, vpl, i as usize, cs, cam_medium, key, clamps.surface)
+        })
     }
     fn to_point(
         scene: &Scene,
