@@ -8,17 +8,7 @@ use haze_scene::shape::cube_mesh;
 use haze_scene::{Bsdf, Camera, Emitter, Geometry, IntegratorSpec, Medium, Scene, Shape};
 
 fn camera(medium: Option<u32>) -> Camera {
-    Camera {
-        filter: haze_scene::camera::PixelFilter::Box,
-        to_world: Mat4::IDENTITY,
-        projection: haze_scene::camera::Projection::Pinhole,
-        fov_x_deg: 30.0,
-        near_clip: 0.0,
-        far_clip: 1e4,
-        medium,
-        width: 4,
-        height: 4,
-    }
+    Camera { medium, ..Camera::pinhole(Mat4::IDENTITY, 30.0, (4, 4)) }
 }
 
 fn volpath() -> VolPath {

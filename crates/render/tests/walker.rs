@@ -8,17 +8,7 @@ use haze_scene::shape::cube_mesh;
 use haze_scene::{Bsdf, Camera, Emitter, Flight, Geometry, IntegratorSpec, Medium, Scene, Shape};
 
 fn slab(sigma_t: Rgb) -> Scene {
-    let camera = Camera {
-        filter: haze_scene::camera::PixelFilter::Box,
-        to_world: Mat4::IDENTITY,
-        projection: haze_scene::camera::Projection::Pinhole,
-        fov_x_deg: 30.0,
-        near_clip: 0.0,
-        far_clip: 1e4,
-        medium: None,
-        width: 4,
-        height: 4,
-    };
+    let camera = Camera::pinhole(Mat4::IDENTITY, 30.0, (4, 4));
     let shape = Shape {
         name: "slab".into(),
         geometry: Geometry::Mesh(cube_mesh(&Mat4::IDENTITY, false)),

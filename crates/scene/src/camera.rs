@@ -129,6 +129,38 @@ impl PixelFilter {
 }
 
 impl Camera {
+    /// Mitsuba 3's default `near_clip` of every sensor.
+    pub const DEFAULT_NEAR_CLIP: f32 = 0.01;
+    /// Mitsuba 3's default `far_clip` of every sensor.
+    pub const DEFAULT_FAR_CLIP: f32 = 10000.0;
+
+    /// A `perspective` camera with the full horizontal field of view `fov_x_deg` and a
+    /// `width x height` film: Mitsuba 3's default clip planes, a `box` filter (a sample's film
+    /// position is uniform in its pixel), in vacuum. For scenes built in code (tests,
+    /// examples), which change any other field with struct update syntax:
+    ///
+    /// ```
+    /// # use glam::Mat4;
+    /// # use haze_scene::Camera;
+    /// let camera = Camera { medium: Some(0), ..Camera::pinhole(Mat4::IDENTITY, 30.0, (4, 4)) };
+    /// assert!(camera.is_pinhole() && camera.medium == Some(0));
+    /// ```
+    pub fn pinhole(to_world: Mat4, fov_x_deg: f32, (width, height): (u32, u32)) -> Camera {
+        Camera {
+            to_world,
+            projection: Projection::Pinhole,
+            fov_x_deg,
+            near_clip: Self::DEFAULT_NEAR_CLIP,
+            far_clip: Self::DEFAULT_FAR_CLIP,
+            medium: None,
+            width,
+            height,
+            filter: PixelFilter::Box,
+        }
+    }
+}
+
+impl Camera {
     /// A film position (pixel units) for a sample of pixel `(x, y)`, drawn from the
     /// reconstruction filter around the pixel centre (see [`PixelFilter`]). For `box` this is
     /// `(x, y) + sampler.next_2d()`, the uniform position in the pixel.
@@ -421,15 +453,10 @@ mod tests {
 
     fn camera(projection: Projection, to_world: Mat4, near_clip: f32) -> Camera {
         Camera {
-            to_world,
             projection,
-            fov_x_deg: 40.0,
             near_clip,
             far_clip: if near_clip == 1.0 { 100.0 } else { 10000.0 },
-            medium: None,
-            width: 200,
-            height: 120,
-            filter: PixelFilter::Box,
+            ..Camera::pinhole(to_world, 40.0, (200, 120))
         }
     }
 
@@ -522,17 +549,8 @@ mod tests {
     #[test]
     fn film_positions_follow_the_filter() {
         for filter in [PixelFilter::Tent { radius: 1.0 }, PixelFilter::Gaussian { stddev: 0.5 }] {
-            let camera = Camera {
-                to_world: Mat4::IDENTITY,
-                projection: Projection::Pinhole,
-                fov_x_deg: 40.0,
-                near_clip: 0.01,
-                far_clip: 100.0,
-                medium: None,
-                width: 20,
-                height: 20,
-                filter,
-            };
+            let camera =
+                Camera { far_clip: 100.0, filter, ..Camera::pinhole(Mat4::IDENTITY, 40.0, (20, 20)) };
             let r = filter.radius();
             let mut sampler = Sampler::from_seed(5);
             let mut xs = Vec::new();

@@ -388,7 +388,6 @@ fn beer_lambert(sigma_t: Rgb, d: f32) -> Rgb {
 mod tests {
     use super::*;
     use glam::Mat4;
-    use haze_scene::camera::PixelFilter;
     use haze_scene::{Bsdf, Camera, Emitter, Geometry, IntegratorSpec, Shape, Texture, TriangleMesh};
 
     /// The quad `x in [x0, x1]`, `z in [-1, 1]` at height `y`, normal `+y` or `-y`, opaque black.
@@ -421,17 +420,7 @@ mod tests {
 
     /// A one-pixel camera at the origin, in vacuum.
     fn camera() -> Camera {
-        Camera {
-            filter: PixelFilter::Box,
-            to_world: Mat4::IDENTITY,
-            projection: haze_scene::camera::Projection::Pinhole,
-            fov_x_deg: 30.0,
-            near_clip: 0.0,
-            far_clip: 1e4,
-            medium: None,
-            width: 1,
-            height: 1,
-        }
+        Camera::pinhole(Mat4::IDENTITY, 30.0, (1, 1))
     }
 
     fn scene_with(shapes: Vec<Shape>, media: Vec<haze_scene::Medium>, emitters: Vec<Emitter>) -> Scene {

@@ -348,18 +348,8 @@ mod tests {
         Geometry::Mesh(TriangleMesh::new(positions, None, None, indices, false))
     }
 
-    fn camera(to_world: Mat4, fov: f32, (width, height): (u32, u32), filter: PixelFilter) -> Camera {
-        Camera {
-            to_world,
-            projection: crate::camera::Projection::Pinhole,
-            fov_x_deg: fov,
-            near_clip: 0.05,
-            far_clip: 1e4,
-            medium: None,
-            width,
-            height,
-            filter,
-        }
+    fn camera(to_world: Mat4, fov: f32, film: (u32, u32), filter: PixelFilter) -> Camera {
+        Camera { near_clip: 0.05, filter, ..Camera::pinhole(to_world, fov, film) }
     }
 
     /// The closest hit as `(t bits, shape, primitive)`.

@@ -47,11 +47,11 @@ pub(super) fn build<'a>(b: &mut Builder<'a>, el: &'a Element) -> Result<(Camera,
     };
     let orthographic = p.ty() == "orthographic";
     let fov_x_deg = if orthographic { 0.0 } else { fov_x(&p, width as f32 / height as f32)? };
-    let near_clip = p.float("near_clip", 0.01)?;
+    let near_clip = p.float("near_clip", Camera::DEFAULT_NEAR_CLIP)?;
     if near_clip <= 0.0 {
         return Err(p.error_at("near_clip", format!("'near_clip' must be > 0, got {near_clip}")));
     }
-    let far_clip = p.float("far_clip", 10000.0)?;
+    let far_clip = p.float("far_clip", Camera::DEFAULT_FAR_CLIP)?;
     if far_clip <= near_clip {
         return Err(p.error_at(
             "far_clip",
