@@ -16,7 +16,7 @@ use crate::tree::Node;
 use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
 use haze_core::Rgb;
-use haze_scene::Scene;
+use haze_scene::{MediumId, Scene};
 use std::cell::RefCell;
 
 thread_local! {
@@ -50,7 +50,54 @@ impl Default for BoundCut {
     }
 }
 
+/// What the bound cut computes once per pass from the pass's media (`docs/theory.md` §7, and
+/// §12.5 for heterogeneous media).
+pub struct BoundPass {
+    /// Per medium, `sigma_s f_max` on the camera side (`crate::hetero::bound_factor`).
+    pub(super) camera_factors: Vec<Rgb>,
+    /// The largest of `camera_factors`: any medium may hold the light.
+    light_factor: Rgb,
+    /// The least extinction any connection may see: zero where one may cross vacuum (a camera
+    /// or a light outside every medium) or a heterogeneous medium (its extinction may be zero
+    /// anywhere in its box, and is outside it).
+    sigma_t_min: Rgb,
+    /// The phase every medium shares, if one (for the tight bound's light-side phase).
+    light_phase: Option<haze_core::Phase>,
+}
+
+impl BoundPass {
+    fn new(scene: &Scene, media: &[VrlMedium]) -> BoundPass {
+        let vacuum = scene.camera.medium.is_none()
+            || scene
+                .shapes
+                .iter()
+                .any(|s| s.is_medium_transition() && (s.interior.is_none() || s.exterior.is_none()));
+        let sigma_t_min = if vacuum || crate::hetero::any(scene) {
+            Rgb::ZERO
+        } else {
+            media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| {
+                Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
+            })
+        };
+        let camera_factors: Vec<Rgb> = (0..media.len())
+            .map(|id| crate::hetero::bound_factor(scene, &media[id], id as MediumId))
+            .collect();
+        BoundPass {
+            light_factor: camera_factors.iter().fold(Rgb::ZERO, |a, f| a.max(*f)),
+            camera_factors,
+            sigma_t_min,
+            light_phase: media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p)),
+        }
+    }
+}
+
 impl CutStrategy for BoundCut {
+    type PassData = BoundPass;
+
+    fn pass_data(&self, scene: &Scene, media: &[VrlMedium]) -> BoundPass {
+        BoundPass::new(scene, media)
+    }
+
     fn name<K: ClusterKind>(&self) -> &'static str {
         K::NAME
     }
@@ -67,7 +114,7 @@ impl CutStrategy for BoundCut {
 
     fn segment<K: ClusterKind, O: CutObserver<K>>(
         &self,
-        view: &PassView<'_, K>,
+        view: &PassView<'_, K, Self>,
         cs: &CameraSegment,
         key: u64,
         _observer: &O,
@@ -76,7 +123,7 @@ impl CutStrategy for BoundCut {
         [a, b + surface_cut(view, cs, key, &self.points)]
     }
 
-    fn point<K: ClusterKind>(&self, view: &PassView<'_, K>, gp: &GatherPoint, key: u64) -> Rgb {
+    fn point<K: ClusterKind>(&self, view: &PassView<'_, K, Self>, gp: &GatherPoint, key: u64) -> Rgb {
         point_cut(view, gp, key, &self.points)
     }
 
@@ -92,23 +139,28 @@ impl CutStrategy for BoundCut {
 impl BoundCut {
     /// What the cut bounds the contributions to camera segment `cs` with (`docs/theory.md` §7,
     /// and §12.5 for heterogeneous media).
-    pub(super) fn context<K: ClusterKind>(&self, pass: &LightcutPass<K>, cs: &CameraSegment) -> BoundContext {
+    pub(super) fn context<K: ClusterKind>(
+        &self,
+        pass: &LightcutPass<K, Self>,
+        cs: &CameraSegment,
+    ) -> BoundContext {
+        let b = &pass.strategy;
         BoundContext {
             seg: cs.seg,
-            camera_factor: pass.bound_factors[cs.medium as usize],
-            light_factor: pass.light_factor,
-            sigma_t_min: pass.sigma_t_min,
+            camera_factor: b.camera_factors[cs.medium as usize],
+            light_factor: b.light_factor,
+            sigma_t_min: b.sigma_t_min,
             kind: self.bound,
             theta: self.theta,
             camera_phase: pass.media[cs.medium as usize].phase,
-            light_phase: pass.light_phase,
+            light_phase: b.light_phase,
         }
     }
 
     /// The cut of medium tree `group` for camera segment `cs`.
     fn medium_cut<K: ClusterKind>(
         &self,
-        view: &PassView<'_, K>,
+        view: &PassView<'_, K, Self>,
         cs: &CameraSegment,
         key: u64,
         group: usize,

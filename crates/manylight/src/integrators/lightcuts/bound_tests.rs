@@ -67,7 +67,7 @@ fn check<K: ClusterKind>(scene: &Scene, kind: BoundKind, seed: u64, camera_scale
     let settings = BoundCut { bound: kind, ..Default::default() };
     let lc = LightcutsIntegrator::<K, BoundCut>::new(scene, ml, settings, seed).unwrap();
     let mut pass = lc.begin_pass(scene, seed, 0);
-    for f in &mut pass.bound_factors {
+    for f in &mut pass.strategy.camera_factors {
         *f *= camera_scale;
     }
     let mut s = Sampler::from_seed(seed);

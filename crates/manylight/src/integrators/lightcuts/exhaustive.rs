@@ -9,6 +9,7 @@ use crate::integrators::light_uniforms;
 use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
 use haze_core::Rgb;
+use haze_scene::Scene;
 use std::sync::atomic::Ordering;
 
 /// Every light evaluated; no tree is built. Light `i` of a group gets the numbers
@@ -17,6 +18,10 @@ use std::sync::atomic::Ordering;
 pub struct ExhaustiveCut;
 
 impl CutStrategy for ExhaustiveCut {
+    type PassData = ();
+
+    fn pass_data(&self, _scene: &Scene, _media: &[VrlMedium]) {}
+
     fn name<K: ClusterKind>(&self) -> &'static str {
         K::EXHAUSTIVE_NAME
     }
@@ -33,7 +38,7 @@ impl CutStrategy for ExhaustiveCut {
 
     fn segment<K: ClusterKind, O: CutObserver<K>>(
         &self,
-        view: &PassView<'_, K>,
+        view: &PassView<'_, K, Self>,
         cs: &CameraSegment,
         key: u64,
         _observer: &O,
@@ -56,7 +61,7 @@ impl CutStrategy for ExhaustiveCut {
 
     /// The lights of both groups in order, each with the numbers of its index among them, then
     /// the surface VPLs.
-    fn point<K: ClusterKind>(&self, view: &PassView<'_, K>, gp: &GatherPoint, key: u64) -> Rgb {
+    fn point<K: ClusterKind>(&self, view: &PassView<'_, K, Self>, gp: &GatherPoint, key: u64) -> Rgb {
         let (scene, pass, clamps) = (view.scene, view.pass, view.clamps);
         let mut sum = Rgb::ZERO;
         for (i, light) in pass.forests.iter().flat_map(|f| &f.lights).enumerate() {

@@ -121,17 +121,13 @@ pub struct LightcutsIntegrator<K: ClusterKind, S: CutStrategy = StochasticCut> {
 }
 
 /// What one pass shares between its camera samples: the forests and the media.
-pub struct LightcutPass<K: ClusterKind> {
+pub struct LightcutPass<K: ClusterKind, S: CutStrategy> {
     /// The medium lights' two groups (medium-only, after a surface bounce), with their trees
     /// if the strategy cuts trees.
     forests: [Forest<K>; 2],
     media: Vec<VrlMedium>,
-    /// Per medium, the bound cut's `sigma_s f_max` factor (`crate::hetero::bound_factor`).
-    bound_factors: Vec<Rgb>,
-    light_factor: Rgb,
-    sigma_t_min: Rgb,
-    /// The phase every medium shares, if one (for the tight bound's light-side phase).
-    light_phase: Option<haze_core::Phase>,
+    /// What the strategy computes once per pass (`CutStrategy::pass_data`).
+    strategy: S::PassData,
     /// The surface VPLs, with a tree if the strategy cuts trees.
     surface: Forest<SurfaceVpls>,
     /// Mean extinction of the scene's media (the gathering points' importance).
@@ -218,13 +214,13 @@ impl<K: ClusterKind> LightcutsIntegrator<K, ExhaustiveCut> {
 }
 
 impl<K: ClusterKind, S: CutStrategy> Integrator for LightcutsIntegrator<K, S> {
-    type PassData = LightcutPass<K>;
+    type PassData = LightcutPass<K, S>;
 
     fn name(&self) -> &str {
         self.strategy.name::<K>()
     }
 
-    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K, S> {
         let t0 = Instant::now();
         let set = trace_light_paths(scene, self.paths, seed, pass, &self.ml.trace)
             .expect("emitters were checked when the integrator was made");
@@ -247,46 +243,18 @@ impl<K: ClusterKind, S: CutStrategy> Integrator for LightcutsIntegrator<K, S> {
         self.stats.build_ns.fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
         self.stats.lights.fetch_add(n as u64, Ordering::Relaxed);
         self.stats.passes.fetch_add(1, Ordering::Relaxed);
-        // Bounds on transmittance use the least extinction any connection may see; vacuum
-        // anywhere (a camera or light outside every medium) makes it zero.
-        let vacuum = scene.camera.medium.is_none()
-            || scene
-                .shapes
-                .iter()
-                .any(|s| s.is_medium_transition() && (s.interior.is_none() || s.exterior.is_none()));
-        // A heterogeneous medium's extinction may be 0 anywhere in its box (and is outside it).
-        let sigma_t_min = if vacuum || crate::hetero::any(scene) {
-            Rgb::ZERO
-        } else {
-            media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| {
-                Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
-            })
-        };
-        let light_phase = media.first().map(|m| m.phase).filter(|p| media.iter().all(|m| m.phase == *p));
-        let bound_factors: Vec<Rgb> = (0..media.len())
-            .map(|id| crate::hetero::bound_factor(scene, &media[id], id as MediumId))
-            .collect();
-        LightcutPass {
-            light_factor: bound_factors.iter().fold(Rgb::ZERO, |a, f| a.max(*f)),
-            bound_factors,
-            forests,
-            media,
-            sigma_t_min,
-            light_phase,
-            surface,
-            sigma_mean,
-            splats,
-        }
+        let strategy = self.strategy.pass_data(scene, &media);
+        LightcutPass { forests, media, strategy, surface, sigma_mean, splats }
     }
 
-    fn pixel_light(&self, pass: &LightcutPass<K>, pixel: u64) -> Rgb {
+    fn pixel_light(&self, pass: &LightcutPass<K, S>, pixel: u64) -> Rgb {
         pass.splats.get(pixel)
     }
 
     fn radiance(
         &self,
         scene: &Scene,
-        pass: &LightcutPass<K>,
+        pass: &LightcutPass<K, S>,
         ray: Ray,
         medium: Option<MediumId>,
         sampler: &mut Sampler,
@@ -322,7 +290,7 @@ impl<K: ClusterKind, S: CutStrategy> Integrator for LightcutsIntegrator<K, S> {
 /// The lightcut integrator's side of the camera walk (`gather.rs`): its strategy's sums.
 struct LightcutGather<'a, K: ClusterKind, S: CutStrategy, O> {
     integrator: &'a LightcutsIntegrator<K, S>,
-    view: PassView<'a, K>,
+    view: PassView<'a, K, S>,
     observer: &'a O,
 }
 
@@ -330,7 +298,7 @@ impl<'a, K: ClusterKind, S: CutStrategy, O> LightcutGather<'a, K, S, O> {
     fn new(
         integrator: &'a LightcutsIntegrator<K, S>,
         scene: &'a Scene,
-        pass: &'a LightcutPass<K>,
+        pass: &'a LightcutPass<K, S>,
         observer: &'a O,
     ) -> Self {
         let view = PassView { scene, pass, clamps: &integrator.clamps, stats: &integrator.stats };

@@ -47,24 +47,24 @@ pub struct Observed<'a, K: ClusterKind, S: CutStrategy, O> {
 }
 
 impl<K: ClusterKind, S: CutStrategy, O: CutObserver<K>> Integrator for Observed<'_, K, S, O> {
-    type PassData = LightcutPass<K>;
+    type PassData = LightcutPass<K, S>;
 
     fn name(&self) -> &str {
         self.integrator.name()
     }
 
-    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K, S> {
         self.integrator.begin_pass(scene, seed, pass)
     }
 
-    fn pixel_light(&self, pass: &LightcutPass<K>, pixel: u64) -> Rgb {
+    fn pixel_light(&self, pass: &LightcutPass<K, S>, pixel: u64) -> Rgb {
         self.integrator.pixel_light(pass, pixel)
     }
 
     fn radiance(
         &self,
         scene: &Scene,
-        pass: &LightcutPass<K>,
+        pass: &LightcutPass<K, S>,
         ray: Ray,
         medium: Option<MediumId>,
         sampler: &mut Sampler,

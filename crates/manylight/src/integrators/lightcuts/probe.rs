@@ -38,20 +38,20 @@ pub(super) fn tally(value: f64) {
 pub struct CutSizeProbe<'a, K: ClusterKind, S: CutStrategy>(pub &'a LightcutsIntegrator<K, S>);
 
 impl<K: ClusterKind, S: CutStrategy> Integrator for CutSizeProbe<'_, K, S> {
-    type PassData = LightcutPass<K>;
+    type PassData = LightcutPass<K, S>;
 
     fn name(&self) -> &str {
         self.0.name()
     }
 
-    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K> {
+    fn begin_pass(&self, scene: &Scene, seed: u64, pass: u32) -> LightcutPass<K, S> {
         self.0.begin_pass(scene, seed, pass)
     }
 
     fn radiance(
         &self,
         scene: &Scene,
-        pass: &LightcutPass<K>,
+        pass: &LightcutPass<K, S>,
         ray: Ray,
         medium: Option<MediumId>,
         sampler: &mut Sampler,

@@ -20,6 +20,7 @@ use crate::vpl::SurfaceVpl;
 use crate::vrl::VrlMedium;
 use haze_core::streams::{LIGHT_SAMPLES, POINT_CUT, SEGMENT_CUT, SURFACE_VPL_CUT};
 use haze_core::Rgb;
+use haze_scene::Scene;
 use std::cell::RefCell;
 
 thread_local! {
@@ -35,6 +36,10 @@ pub struct StochasticCut {
 }
 
 impl CutStrategy for StochasticCut {
+    type PassData = ();
+
+    fn pass_data(&self, _scene: &Scene, _media: &[VrlMedium]) {}
+
     fn name<K: ClusterKind>(&self) -> &'static str {
         K::NAME
     }
@@ -51,7 +56,7 @@ impl CutStrategy for StochasticCut {
 
     fn segment<K: ClusterKind, O: CutObserver<K>>(
         &self,
-        view: &PassView<'_, K>,
+        view: &PassView<'_, K, Self>,
         cs: &CameraSegment,
         key: u64,
         observer: &O,
@@ -60,7 +65,7 @@ impl CutStrategy for StochasticCut {
         [a, b + surface_cut(view, cs, key, &self.settings)]
     }
 
-    fn point<K: ClusterKind>(&self, view: &PassView<'_, K>, gp: &GatherPoint, key: u64) -> Rgb {
+    fn point<K: ClusterKind>(&self, view: &PassView<'_, K, Self>, gp: &GatherPoint, key: u64) -> Rgb {
         point_cut(view, gp, key, &self.settings)
     }
 
@@ -77,7 +82,7 @@ impl StochasticCut {
     /// `light_samples` joint samples averaged, weighted by `1 / probability`.
     fn medium_cut<K: ClusterKind, O: CutObserver<K>>(
         &self,
-        view: &PassView<'_, K>,
+        view: &PassView<'_, K, Self>,
         cs: &CameraSegment,
         key: u64,
         group: usize,
@@ -153,8 +158,8 @@ impl StochasticCut {
 
 /// The surface VPLs' light at camera segment `cs`, cut stochastically with the segment's
 /// importance.
-pub(super) fn surface_cut<K: ClusterKind>(
-    view: &PassView<'_, K>,
+pub(super) fn surface_cut<K: ClusterKind, S: CutStrategy>(
+    view: &PassView<'_, K, S>,
     cs: &CameraSegment,
     key: u64,
     settings: &StochasticSettings,
@@ -168,8 +173,8 @@ pub(super) fn surface_cut<K: ClusterKind>(
 }
 
 /// The gathering point's cut: one of the three trees chosen, then cut stochastically.
-pub(super) fn point_cut<K: ClusterKind>(
-    view: &PassView<'_, K>,
+pub(super) fn point_cut<K: ClusterKind, S: CutStrategy>(
+    view: &PassView<'_, K, S>,
     gp: &GatherPoint,
     key: u64,
     settings: &StochasticSettings,

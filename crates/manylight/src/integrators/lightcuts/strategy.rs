@@ -27,6 +27,13 @@ pub trait CutStrategy: Clone + std::fmt::Debug + Send + Sync + 'static {
     /// The integrator's name for light kind `K` (`vrl`, `vrl_lightcuts`, ...).
     fn name<K: ClusterKind>(&self) -> &'static str;
 
+    /// What the strategy computes once per pass besides the forests, from the pass's media
+    /// (the bound cut's per-medium factors, `super::bound::BoundPass`; `()` for the others).
+    type PassData: Send + Sync;
+
+    /// The pass's [`CutStrategy::PassData`]; called once per pass.
+    fn pass_data(&self, scene: &Scene, media: &[VrlMedium]) -> Self::PassData;
+
     /// The pass's forests from its lights: the medium lights' two groups (medium-only, after a
     /// surface bounce) and the surface VPLs, with trees built from `seed` if the strategy cuts
     /// trees. Called once per pass, before any [`CutStrategy::segment`] or
@@ -44,7 +51,7 @@ pub trait CutStrategy: Clone + std::fmt::Debug + Send + Sync + 'static {
     /// `observer` sees every stochastic cut of a medium tree.
     fn segment<K: ClusterKind, O: CutObserver<K>>(
         &self,
-        view: &PassView<'_, K>,
+        view: &PassView<'_, K, Self>,
         cs: &CameraSegment,
         key: u64,
         observer: &O,
@@ -52,7 +59,7 @@ pub trait CutStrategy: Clone + std::fmt::Debug + Send + Sync + 'static {
 
     /// The estimate of the sum over every light of the pass of its light at the gathering
     /// surface point `gp` (`gather::Gather::point`).
-    fn point<K: ClusterKind>(&self, view: &PassView<'_, K>, gp: &GatherPoint, key: u64) -> Rgb;
+    fn point<K: ClusterKind>(&self, view: &PassView<'_, K, Self>, gp: &GatherPoint, key: u64) -> Rgb;
 
     /// The summary line's account of the cuts, from the mean and largest cut size per camera
     /// segment and tree and the fraction of segments that hit a size limit; `None` for a
@@ -62,9 +69,9 @@ pub trait CutStrategy: Clone + std::fmt::Debug + Send + Sync + 'static {
 
 /// What a strategy reads while it sums lights: the scene, the pass, the integrator's clamps
 /// and its counters.
-pub struct PassView<'a, K: ClusterKind> {
+pub struct PassView<'a, K: ClusterKind, S: CutStrategy> {
     pub(super) scene: &'a Scene,
-    pub(super) pass: &'a LightcutPass<K>,
+    pub(super) pass: &'a LightcutPass<K, S>,
     pub(super) clamps: &'a Clamps,
     pub(super) stats: &'a Stats,
 }
