@@ -14,21 +14,16 @@
 set -euo pipefail
 rounds=10
 if [ "${1:-}" = "-n" ]; then rounds=$2; shift 2; fi
-bins=()
-while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$1"); shift; done
-[ "${1:-}" = "--" ] || { echo "usage: scripts/ab.sh [-n ROUNDS] BASE_BIN OTHER_BIN... -- SCENE:METHOD[:ARGS]..." >&2; exit 2; }
-shift
-[ ${#bins[@]} -ge 2 ] && [ $# -ge 1 ] || { echo "ab.sh: give at least two builds and one workload" >&2; exit 2; }
-for b in "${bins[@]}"; do [ -x "$b" ] || { echo "ab.sh: $b is not an executable" >&2; exit 2; }; done
+# shellcheck source=scripts/builds-args.sh
+source "$(dirname "$0")/builds-args.sh"
+parse_builds ab.sh "scripts/ab.sh [-n ROUNDS] BASE_BIN OTHER_BIN... -- SCENE:METHOD[:ARGS]..." "$@"
 log=${AB_LOG:-target/ab.log}
 mkdir -p "$(dirname "$log")"
 : > "$log"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
-for spec in "$@"; do
-  scene=${spec%%:*}; rest=${spec#*:}; method=${rest%%:*}; args=""
-  [ "$rest" != "$method" ] && args=$(echo "${rest#*:}" | tr ',' ' ')
-  [ -f "$scene" ] || { echo "ab.sh: no scene $scene" >&2; exit 2; }
+for spec in "${specs[@]}"; do
+  parse_spec "$spec"
   for round in $(seq "$rounds"); do
     order=("${bins[@]}")
     if [ $((round % 2)) = 0 ]; then

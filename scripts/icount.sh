@@ -16,18 +16,13 @@
 set -euo pipefail
 command -v valgrind > /dev/null && command -v callgrind_annotate > /dev/null \
   || { echo "icount.sh: needs valgrind (apt-get install valgrind)" >&2; exit 2; }
-bins=()
-while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$1"); shift; done
-[ "${1:-}" = "--" ] || { echo "usage: scripts/icount.sh BASE_BIN OTHER_BIN... -- SCENE:METHOD[:ARGS]..." >&2; exit 2; }
-shift
-[ ${#bins[@]} -ge 2 ] && [ $# -ge 1 ] || { echo "icount.sh: give at least two builds and one workload" >&2; exit 2; }
-for b in "${bins[@]}"; do [ -x "$b" ] || { echo "icount.sh: $b is not an executable" >&2; exit 2; }; done
+# shellcheck source=scripts/builds-args.sh
+source "$(dirname "$0")/builds-args.sh"
+parse_builds icount.sh "scripts/icount.sh BASE_BIN OTHER_BIN... -- SCENE:METHOD[:ARGS]..." "$@"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
-for spec in "$@"; do
-  scene=${spec%%:*}; rest=${spec#*:}; method=${rest%%:*}; args=""
-  [ "$rest" != "$method" ] && args=$(echo "${rest#*:}" | tr ',' ' ')
-  [ -f "$scene" ] || { echo "icount.sh: no scene $scene" >&2; exit 2; }
+for spec in "${specs[@]}"; do
+  parse_spec "$spec"
   for i in "${!bins[@]}"; do
     # shellcheck disable=SC2086
     valgrind --tool=callgrind --callgrind-out-file="$out/cg.$i" "${bins[$i]}" render "$scene" \
