@@ -28,7 +28,8 @@
 # seeds with its min-max, and RMSE ratios computed per seed (same run, same machine load).
 # Methods: volpath; brute-force vrl at two light counts; the paper's deterministic cut
 # (cut=bound) at two; the stochastic cut (the default) at two, with --light-samples 4, and
-# vpl_lightcuts. Camera samples per pass: 1 for volpath (it batches passes anyway), brute-force
+# vpl_lightcuts; on the validation scenes also the stochastic cut with path_traced_media=all.
+# Camera samples per pass: 1 for volpath (it batches passes anyway), brute-force
 # vrl and the bound cut (their cost per sample grows with the lights), the auto default for the
 # stochastic cut (16 at 128x128, 1 at 640x360), whose pass's light tracing and build are shared
 # by the pass's samples (docs/lightcuts.md, "Choosing the defaults"); the two groups run one
@@ -77,6 +78,10 @@ PEERS_SCENES=${PEERS_SCENES:-"test_homo_dielectric_envmap_volpath test_homo_null
 # pass (haze render --help: about 262,144 camera samples per pass for the lightcut methods).
 METHODS=(volpath vrl:1000 vrl:10000 vrl_lightcuts:10000,cut=bound vrl_lightcuts:100000,cut=bound --
   vrl_lightcuts:1000 vrl_lightcuts:1000,light_samples=4 vrl_lightcuts:10000 vpl_lightcuts:10000)
+# The validation scenes add the stochastic cut with every medium path-traced (the camera path
+# traced as volpath traces it, the virtual lights serving surfaces only): the dense hg-box is
+# lost to volpath with the default gathering.
+VALIDATION_METHODS=("${METHODS[@]}" vrl_lightcuts:1000,path_traced_media=all)
 WIDE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000)
 WHOLE_METHODS=(volpath vrl:1000 -- vrl_lightcuts:1000 vpl_lightcuts:10000)
 PLUME_METHODS=(volpath vrl:1000 vpl:1000 -- vrl_lightcuts:1000 vrl_lightcuts:10000 vpl_lightcuts:10000
@@ -171,7 +176,7 @@ for part in $PARTS; do
       for s in hg-box foggy-room; do
         start_load=$(load)
         table=$(compare "validation-$s" "tests/data/validation/scenes/$s.xml" "tests/data/validation/refs/$s.exr" \
-          "$BUDGET" "" "${METHODS[@]}")
+          "$BUDGET" "" "${VALIDATION_METHODS[@]}")
         printf '\n## %s (validation scene, 128x96), %s s per method\n\n`tests/data/validation/scenes/%s.xml`, Mitsuba 3 reference; load average %s at the start, %s at the end.\n\n%s\n' \
           "$s" "$BUDGET" "$s" "$start_load" "$(load)" "$table" >> "$DOC.tmp"
       done
