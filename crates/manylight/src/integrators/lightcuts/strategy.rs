@@ -24,12 +24,12 @@ use haze_scene::Scene;
 /// `light_uniforms(key, i)` whatever the strategy, so a bound cut refined to every leaf equals
 /// the exhaustive cut up to the order of the sum.
 pub trait CutStrategy: Clone + std::fmt::Debug + Send + Sync + 'static {
-    /// The integrator's name for light kind `K` (`vrl`, `vrl_lightcuts`, ...).
-    fn name<K: ClusterKind>(&self) -> &'static str;
-
     /// What the strategy computes once per pass besides the forests, from the pass's media
     /// (the bound cut's per-medium factors, `super::bound::BoundPass`; `()` for the others).
     type PassData: Send + Sync;
+
+    /// The integrator's name for light kind `K` (`vrl`, `vrl_lightcuts`, ...).
+    fn name<K: ClusterKind>(&self) -> &'static str;
 
     /// The pass's [`CutStrategy::PassData`]; called once per pass.
     fn pass_data(&self, scene: &Scene, media: &[VrlMedium]) -> Self::PassData;
