@@ -57,27 +57,43 @@ impl Sampler {
     /// Uniform in `[0, 1)`, 24 bits of precision so that the result is never 1.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        match &mut self.pattern {
+        match self.pattern {
             None => uniform(&mut self.rng),
-            Some(p) => {
-                let rng = &mut self.rng;
-                p.next_1d(&mut || uniform(rng))
-            }
+            Some(_) => self.pattern_1d(),
         }
     }
 
     #[inline]
     pub fn next_2d(&mut self) -> glam::Vec2 {
-        match &mut self.pattern {
+        match self.pattern {
             None => {
                 let a = uniform(&mut self.rng);
                 glam::Vec2::new(a, uniform(&mut self.rng))
             }
+            Some(_) => self.pattern_2d(),
+        }
+    }
+
+    // The patterns out of line: the independent stream (every light path, and pixels without a
+    // pattern) inlines into the walks at a few instructions per number.
+    #[inline(never)]
+    fn pattern_1d(&mut self) -> f32 {
+        let Sampler { rng, pattern } = self;
+        match pattern {
+            Some(p) => p.next_1d(&mut || uniform(rng)),
+            None => uniform(rng),
+        }
+    }
+
+    #[inline(never)]
+    fn pattern_2d(&mut self) -> glam::Vec2 {
+        let Sampler { rng, pattern } = self;
+        match pattern {
             Some(p) => {
-                let rng = &mut self.rng;
                 let (x, y) = p.next_2d(&mut || uniform(rng));
                 glam::Vec2::new(x, y)
             }
+            None => glam::Vec2::new(uniform(rng), uniform(rng)),
         }
     }
 

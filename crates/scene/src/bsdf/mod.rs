@@ -114,7 +114,17 @@ impl BsdfSample {
 }
 
 impl Bsdf {
+    #[inline]
     pub fn is_null(&self) -> bool {
+        match self {
+            Bsdf::Null => true,
+            Bsdf::TwoSided(_) | Bsdf::Blend(_) | Bsdf::Perturbed(_) => self.nested_is_null(),
+            _ => false,
+        }
+    }
+
+    // Out of line: the nesting recurses, and the common BSDFs answer above without a call.
+    fn nested_is_null(&self) -> bool {
         match self {
             Bsdf::Null => true,
             Bsdf::TwoSided(b) => b.is_null(),
