@@ -24,6 +24,10 @@ impl Rgb {
     pub fn max(self, o: Rgb) -> Self {
         Rgb([self.0[0].max(o.0[0]), self.0[1].max(o.0[1]), self.0[2].max(o.0[2])])
     }
+    /// Channel-wise minimum.
+    pub fn min(self, o: Rgb) -> Self {
+        Rgb([self.0[0].min(o.0[0]), self.0[1].min(o.0[1]), self.0[2].min(o.0[2])])
+    }
     pub fn max_component(self) -> f32 {
         self.0[0].max(self.0[1]).max(self.0[2])
     }

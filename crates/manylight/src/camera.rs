@@ -3,7 +3,7 @@
 
 use crate::vrl::{Segment, VrlMedium};
 use haze_core::Rgb;
-use haze_scene::{MediumId, MediumKind, Scene};
+use haze_scene::{MediumId, Scene};
 
 /// One medium interval of a camera chain (a gathering segment).
 #[derive(Clone, Copy, Debug)]
@@ -27,11 +27,6 @@ pub const MAX_SEGMENTS: usize = 64;
 /// the medium itself (`crate::hetero`).
 pub fn estimator_medium(scene: &Scene, id: MediumId) -> VrlMedium {
     let m = scene.medium(id);
-    match &m.kind {
-        MediumKind::Homogeneous(c) => VrlMedium { sigma_s: c.sigma_s(), sigma_t: c.sigma_t, phase: m.phase },
-        MediumKind::Grid(h) => {
-            let sigma_t = h.mean_majorant();
-            VrlMedium { sigma_s: sigma_t * m.albedo_bound(), sigma_t, phase: m.phase }
-        }
-    }
+    let sigma_t = m.mean_majorant();
+    VrlMedium { sigma_s: sigma_t * m.albedo_bound(), sigma_t, phase: m.phase }
 }

@@ -18,14 +18,13 @@ use crate::camera::{CameraSegment, MAX_SEGMENTS};
 use crate::vrl::Segment;
 use glam::Vec3;
 use haze_core::transmittance::hero_channel;
-use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_render::integrators::{area_hit_weight, environment_hits, surface_nee, HandOff, PathState, VolPath};
 use haze_render::walker::Walker;
 use haze_render::{Component, PathRadiance};
 use haze_scene::bsdf::BsdfSample;
 use haze_scene::texture::TexPoint;
-use haze_scene::{Bsdf, Medium, MediumId, MediumKind, Scene, SurfaceInteraction};
+use haze_scene::{Bsdf, Medium, MediumId, Scene, SurfaceInteraction};
 use std::cell::RefCell;
 
 /// A gathering surface point: where a camera chain met a non-delta surface.
@@ -330,19 +329,11 @@ fn walk(
             let cs = c.cs;
             let med = scene.medium(cs.medium);
             let u = u1 * cs.seg.len;
-            st.beta = match &med.kind {
-                MediumKind::Homogeneous(m) => {
-                    cs.tr_before
-                        * transmittance(m.sigma_t, u)
-                        * m.sigma_s()
-                        * (cs.seg.len * candidates as f32 * c.scale)
+            st.beta = match crate::hetero::scattering_factors(med, &cs.seg, u, cs.seg.at(u), sampler) {
+                Some((cam, sigma_s)) => {
+                    cs.tr_before * cam * sigma_s * (cs.seg.len * candidates as f32 * c.scale)
                 }
-                // `T(0, u) sigma_s(x)` estimated (T31).
-                MediumKind::Grid(h) => {
-                    cs.tr_before
-                        * crate::hetero::along(h, &cs.seg, cs.seg.at(u), sampler)
-                        * (cs.seg.len * candidates as f32 * c.scale)
-                }
+                None => Rgb::ZERO,
             };
             st.surface_seen = c.after_surface;
             let (d, _) = med.phase.sample(cs.seg.d, u2);

@@ -20,8 +20,10 @@
 //! table keeps a homogeneous *proxy* of the medium for the light tree's importance
 //! (`crate::camera::estimator_medium`: the mean majorant); the proxy only steers probabilities.
 //!
-//! Scenes without heterogeneous media never reach this module (the callers branch once per
-//! camera segment or light evaluation on [`any`]), so their images are bit for bit as before.
+//! Scenes without heterogeneous media never reach this module's estimates (the callers branch
+//! once per camera segment or light evaluation on [`any`]), so their images are bit for bit as
+//! before; [`scattering_factors`] gives both kinds their `T sigma_s`, exactly in a homogeneous
+//! medium.
 
 use crate::camera::CameraSegment;
 use crate::vpl::{SurfaceVpl, Vpl};
@@ -34,7 +36,7 @@ use haze_core::{Rgb, Sampler};
 use haze_render::integrators::transmittance_to_sampled;
 use haze_scene::hetero::Heterogeneous;
 use haze_scene::marched::MarchedDistance;
-use haze_scene::{MediumId, Scene};
+use haze_scene::{Medium, MediumId, Scene};
 
 /// True if any medium of the scene is heterogeneous.
 #[inline]
@@ -78,6 +80,28 @@ pub(crate) fn along(h: &Heterogeneous, seg: &Segment, x: Vec3, s: &mut Sampler) 
     }
     let t = (x - seg.o).dot(seg.d).clamp(0.0, seg.len);
     sigma_s * h.transmittance(seg.o, seg.d, 0.0, t, s)
+}
+
+/// `T(seg.o, x) sigma_s(x)` at `x = seg.at(v)` in medium `med`, as two factors that the
+/// estimators multiply in turn (each keeps its own order of rounding): in a homogeneous medium
+/// exactly `(exp(-sigma_t v), sigma_s)`; in a grid `(sigma_s(x) T(v), 1)`, `T` by ratio
+/// tracking from `s` ([`along`], (T31)). `None` where a grid gives zero (it does not scatter at
+/// `x`, or the estimate is zero): the caller's estimate is zero.
+#[inline]
+pub(crate) fn scattering_factors(
+    med: &Medium,
+    seg: &Segment,
+    v: f32,
+    x: Vec3,
+    s: &mut Sampler,
+) -> Option<(Rgb, Rgb)> {
+    match med.as_grid() {
+        None => {
+            let (sigma_t, sigma_s) = med.coefficients(x);
+            Some((sigma_t.exp_neg(v), sigma_s))
+        }
+        Some(h) => Some(along(h, seg, x, s)).filter(|f| !f.is_black()).map(|f| (f, Rgb::ONE)),
+    }
 }
 
 /// Transmittance and visibility from `y` (in medium `from`) to `x` with ratio tracking from `s`

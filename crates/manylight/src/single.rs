@@ -20,6 +20,7 @@
 //! is 10 degrees) land where the spot does not shine and estimate zero.
 
 use crate::camera::{estimator_medium, CameraSegment};
+use crate::hetero::scattering_factors;
 use crate::vrl::sampling::{equiangular_pdf, sample_equiangular};
 use glam::Vec2;
 use haze_core::{Rgb, Sampler};
@@ -79,15 +80,8 @@ pub fn single_scattering(scene: &Scene, cs: &CameraSegment, sampler: &mut Sample
         let phase = med.phase.eval(-wi, -cs.seg.d);
         // `T_c(u) sigma_s`: exact in a homogeneous medium; in a heterogeneous one `sigma_s(x)`
         // and a ratio-tracking estimate of `T_c(u)` (T31), independent of the shadow ray's.
-        let (cam, sigma_s) = match &hetero {
-            None => (med.sigma_t.exp_neg(u), med.sigma_s),
-            Some(h) => {
-                let f = crate::hetero::along(h, &cs.seg, x, sampler);
-                if f.is_black() {
-                    continue;
-                }
-                (f, Rgb::ONE)
-            }
+        let Some((cam, sigma_s)) = scattering_factors(scene.medium(cs.medium), &cs.seg, u, x, sampler) else {
+            continue;
         };
         // Homogeneous media draw nothing here: bit for bit `transmittance_to`.
         let tr = transmittance_to_sampled(scene, x, None, wi, dist, Some(cs.medium), sampler);
@@ -163,15 +157,8 @@ fn from_infinity(
         return Rgb::ZERO;
     }
     let phase = med.phase.eval(-es.wi, -cs.seg.d);
-    let (cam, sigma_s) = match &hetero {
-        None => (med.sigma_t.exp_neg(u), med.sigma_s),
-        Some(h) => {
-            let f = crate::hetero::along(h, &cs.seg, x, sampler);
-            if f.is_black() {
-                return Rgb::ZERO;
-            }
-            (f, Rgb::ONE)
-        }
+    let Some((cam, sigma_s)) = scattering_factors(scene.medium(cs.medium), &cs.seg, u, x, sampler) else {
+        return Rgb::ZERO;
     };
     let tr = transmittance_to_sampled(scene, x, None, es.wi, f32::INFINITY, Some(cs.medium), sampler);
     cs.tr_before * cam * sigma_s * tr * es.radiance * (phase / (es.pdf * pdf_u))

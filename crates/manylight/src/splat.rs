@@ -61,13 +61,12 @@ use crate::vpl::SurfaceVpl;
 use glam::{Vec2, Vec3};
 use haze_core::sampling::{sample_uniform_cone, sample_uniform_sphere};
 use haze_core::streams::CAUSTIC_PATHS;
-use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Rgb, Sampler, PI};
 use haze_render::integrators::transmittance_to;
 use haze_render::walker::Walker;
 use haze_scene::camera::{FilmProjector, PixelFilter};
 use haze_scene::lights::EmissionSample;
-use haze_scene::{MediumId, MediumKind, Scene};
+use haze_scene::{MediumId, Scene};
 use rayon::prelude::*;
 
 /// One pass's light-tracing splats: per pixel (row-major, as the film), the light the pass's
@@ -519,13 +518,9 @@ impl<'a> View<'a> {
         }
         // `T(v) sigma_s`: exact in a homogeneous medium; in a heterogeneous one `sigma_s(x)` and a
         // ratio-tracking estimate of `T(v)` (docs/theory.md §12.5, (T31)).
-        let c = match &med.kind {
-            MediumKind::Homogeneous(c) => {
-                beta * transmittance(c.sigma_t, v) * c.sigma_s() * tr * (f * theta_over_h * pr.density)
-            }
-            MediumKind::Grid(h) => {
-                beta * crate::hetero::along(h, &seg, x, s) * tr * (f * theta_over_h * pr.density)
-            }
+        let c = match crate::hetero::scattering_factors(med, &seg, v, x, s) {
+            Some((cam, sigma_s)) => beta * cam * sigma_s * tr * (f * theta_over_h * pr.density),
+            None => Rgb::ZERO,
         };
         Some((pr.px, pr.py, c))
     }

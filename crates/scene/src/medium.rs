@@ -119,6 +119,26 @@ impl Medium {
         }
     }
 
+    /// The mean of the majorant over the medium: `sigma_t` itself when homogeneous, the mean of a
+    /// grid's majorant cells (the homogeneous proxy the many-light methods' importances use,
+    /// `docs/theory.md` §12.5).
+    pub fn mean_majorant(&self) -> Rgb {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => h.sigma_t,
+            MediumKind::Grid(g) => g.mean_majorant(),
+        }
+    }
+
+    /// `(sigma_t, sigma_s)` at the point `p`: the constants of a homogeneous medium; a grid's
+    /// volumes at `p`, zero outside the `sigma_t` volume's box (`Heterogeneous::coefficients`).
+    #[inline]
+    pub fn coefficients(&self, p: Vec3) -> (Rgb, Rgb) {
+        match &self.kind {
+            MediumKind::Homogeneous(h) => (h.sigma_t, h.sigma_s()),
+            MediumKind::Grid(g) => g.coefficients(p),
+        }
+    }
+
     /// Whether the medium can scatter light anywhere (`majorant * albedo_bound` not black): a
     /// purely absorbing medium only attenuates.
     pub fn scatters(&self) -> bool {
@@ -196,6 +216,19 @@ impl Medium {
         match &self.kind {
             MediumKind::Homogeneous(h) => haze_core::transmittance::transmittance(h.sigma_t, t1 - t0),
             MediumKind::Grid(g) => g.transmittance(o, d, t0, t1, sampler),
+        }
+    }
+
+    /// The optical depth `sigma_t len` of a leg of length `len`, where the medium gives it in
+    /// closed form: a homogeneous medium and a finite `len`. `None` where the transmittance
+    /// must be estimated ([`Self::transmittance`]: a grid) or is a limit (an infinite leg: 0 or
+    /// 1 per channel). Shadow rays sum it over the legs they cross and take one `exp` at the
+    /// end (Beer–Lambert: `T(a) T(b) = exp(-(tau_a + tau_b))`).
+    #[inline]
+    pub fn optical_depth(&self, len: f32) -> Option<Rgb> {
+        match &self.kind {
+            MediumKind::Homogeneous(h) if len.is_finite() => Some(h.sigma_t * len),
+            _ => None,
         }
     }
 
@@ -322,6 +355,31 @@ mod tests {
         assert_eq!(homogeneous(sigma_t, Rgb::ONE).support(o, d, 0.0, 5.0), Some((0.0, 5.0)));
         let (a, b) = constant_grid(sigma_t, Rgb::ONE).support(o, d, 0.0, 5.0).expect("crosses the box");
         assert!(a.abs() < 1e-6 && (b - 0.9).abs() < 1e-5, "grid support [{a}, {b}], box [0, 0.9]");
+    }
+
+    /// The point and closed-form queries: a homogeneous medium's constants and optical depth
+    /// `sigma_t len` (none for an infinite leg); a grid's coefficients inside its box, zero
+    /// outside it, and no closed form; the mean majorant of each.
+    #[test]
+    fn coefficients_and_optical_depth_in_both_kinds() {
+        let (sigma_t, albedo) = (Rgb::new(0.5, 1.5, 3.0), Rgb::new(0.2, 0.5, 0.9));
+        let h = homogeneous(sigma_t, albedo);
+        assert_eq!(h.coefficients(Vec3::splat(7.0)), (sigma_t, sigma_t * albedo));
+        assert_eq!(h.optical_depth(2.0), Some(Rgb::new(1.0, 3.0, 6.0)));
+        assert_eq!(h.optical_depth(f32::INFINITY), None);
+        assert_eq!(h.mean_majorant(), sigma_t);
+
+        let g = constant_grid(sigma_t, albedo);
+        let (t, s) = g.coefficients(Vec3::splat(0.5));
+        for c in 0..3 {
+            assert!(
+                (t[c] - sigma_t[c]).abs() < 1e-6 && (s[c] - sigma_t[c] * albedo[c]).abs() < 1e-6,
+                "{t:?} {s:?}"
+            );
+            assert!(g.mean_majorant()[c] >= sigma_t[c] * (1.0 - 1e-6), "{:?}", g.mean_majorant());
+        }
+        assert_eq!(g.coefficients(Vec3::splat(1.5)), (Rgb::ZERO, Rgb::ZERO));
+        assert_eq!(g.optical_depth(2.0), None);
     }
 
     /// The bounds: exact for a homogeneous medium, above every coefficient of a grid.

@@ -2,11 +2,10 @@
 
 use glam::Vec3;
 use haze_core::ray::offset_origin;
-use haze_core::transmittance::transmittance;
 use haze_core::{Frame, Ray, Rgb, Sampler};
 use haze_scene::accel::{Leaving, ShadowHit, ShadowQuery, MAX_SHADOW_HITS};
 use haze_scene::texture::TexPoint;
-use haze_scene::{Boundary, Bsdf, MediumId, MediumKind, Scene, SurfaceInteraction};
+use haze_scene::{Boundary, Bsdf, Medium, MediumId, Scene, SurfaceInteraction};
 
 /// Relative shortening of a shadow segment so that the surface it aims at does not count as an
 /// occluder: `t_max = |y - o| (1 - SHADOW_EPSILON)`. haze has used `1e-4` since the first
@@ -87,22 +86,23 @@ pub fn transmittance_from_surface_sampled(
     transmittance_impl(scene, p, Some(n), Some(shape), d, dist, medium, Some(sampler))
 }
 
-/// Ratio tracking over `[t0, t1]` of `ray` in heterogeneous medium `m`, from `sampler` or,
-/// without one, from a sampler seeded by the ray's bits.
-fn hetero_segment(
-    h: &haze_scene::hetero::Heterogeneous,
+/// The transmittance of medium `med` along `ray` over `[t0, t1]` ([`Medium::transmittance`]:
+/// closed form, or ratio tracking in a grid) with numbers from `sampler` or, without one, from
+/// a sampler seeded by the ray's bits.
+fn segment_transmittance(
+    med: &Medium,
     ray: &Ray,
     t0: f32,
     t1: f32,
     sampler: &mut Option<&mut Sampler>,
 ) -> Rgb {
     match sampler {
-        Some(s) => h.transmittance(ray.o, ray.d, t0, t1, s),
+        Some(s) => med.transmittance(ray.o, ray.d, t0, t1, s),
         None => {
             let key = [ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z, t0]
                 .iter()
                 .fold(0u64, |k, v| haze_core::rng::mix64(k ^ v.to_bits() as u64));
-            h.transmittance(
+            med.transmittance(
                 ray.o,
                 ray.d,
                 t0,
@@ -110,6 +110,25 @@ fn hetero_segment(
                 &mut Sampler::new(haze_core::streams::SHADOW_RATIO_TRACKING, key, t1.to_bits() as u64),
             )
         }
+    }
+}
+
+/// Accumulates the leg `[t0, t1]` of a shadow ray in `med`: its closed-form optical depth
+/// ([`Medium::optical_depth`]) into `tau`, else its transmittance into `tr`; the ray's
+/// transmittance is `tr exp(-tau)`.
+#[inline]
+fn attenuate(
+    med: &Medium,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    sampler: &mut Option<&mut Sampler>,
+    tau: &mut Rgb,
+    tr: &mut Rgb,
+) {
+    match med.optical_depth(t1 - t0) {
+        Some(depth) => *tau += depth,
+        None => *tr *= segment_transmittance(med, ray, t0, t1, sampler),
     }
 }
 
@@ -162,11 +181,7 @@ fn transmittance_impl(
     while i < hits.len() {
         let h = &hits[i];
         if let Some(m) = medium {
-            let med = scene.medium(m);
-            match &med.kind {
-                MediumKind::Homogeneous(c) => tau += c.sigma_t * (h.t - last),
-                MediumKind::Grid(het) => tr *= hetero_segment(het, &ray, last, h.t, &mut sampler),
-            }
+            attenuate(scene.medium(m), &ray, last, h.t, &mut sampler, &mut tau, &mut tr);
         }
         last = h.t;
         let (shape_id, n) = scene.shadow_crossing(h);
@@ -203,12 +218,7 @@ fn transmittance_impl(
         }
     }
     if let Some(m) = medium {
-        let med = scene.medium(m);
-        match &med.kind {
-            MediumKind::Grid(het) => tr *= hetero_segment(het, &ray, last, ray.t_max, &mut sampler),
-            MediumKind::Homogeneous(c) if ray.t_max.is_finite() => tau += c.sigma_t * (ray.t_max - last),
-            MediumKind::Homogeneous(c) => tr *= transmittance(c.sigma_t, f32::INFINITY),
-        }
+        attenuate(scene.medium(m), &ray, last, ray.t_max, &mut sampler, &mut tau, &mut tr);
     }
     tr * exp_neg(tau)
 }
@@ -351,9 +361,9 @@ fn transmittance_segments(
         let seg = hit.map_or(ray.t_max, |h| h.t);
         if let Some(m) = medium {
             let med = scene.medium(m);
-            tr *= match &med.kind {
-                MediumKind::Homogeneous(c) => beer_lambert(c.sigma_t, seg),
-                MediumKind::Grid(het) => hetero_segment(het, &ray, 0.0, seg, &mut sampler),
+            tr *= match med.optical_depth(seg) {
+                Some(depth) => exp_neg(depth),
+                None => segment_transmittance(med, &ray, 0.0, seg, &mut sampler),
             };
             if tr.is_black() {
                 return Rgb::ZERO;
@@ -370,18 +380,6 @@ fn transmittance_segments(
     }
     // A ray that keeps hitting null surfaces 256 times is caught in degenerate geometry.
     Rgb::ZERO
-}
-
-/// [`transmittance`] with a single `exp` for grey extinction (equal channels), the common
-/// case: the same values for a third of the work on every shadow and connection ray.
-#[inline]
-fn beer_lambert(sigma_t: Rgb, d: f32) -> Rgb {
-    let [r, g, b] = sigma_t.0;
-    if r == g && g == b && d.is_finite() {
-        Rgb::splat((-r * d).exp())
-    } else {
-        transmittance(sigma_t, d)
-    }
 }
 
 #[cfg(test)]

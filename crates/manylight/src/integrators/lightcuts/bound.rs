@@ -75,9 +75,7 @@ impl BoundPass {
         let sigma_t_min = if vacuum || crate::hetero::any(scene) {
             Rgb::ZERO
         } else {
-            media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| {
-                Rgb(std::array::from_fn(|c| acc[c].min(m.sigma_t[c])))
-            })
+            media.iter().fold(Rgb::splat(f32::INFINITY), |acc, m| acc.min(m.sigma_t))
         };
         let camera_factors: Vec<Rgb> = (0..media.len())
             .map(|id| crate::hetero::bound_factor(scene, &media[id], id as MediumId))
