@@ -34,10 +34,19 @@ impl Sampler {
     /// `spec`: the stream of [`Sampler::new`]`(seed, pixel, pass)` (so `independent` gives the
     /// same numbers), and `spec`'s pattern keyed by `(seed, pixel)`, at sample 0 until
     /// [`Sampler::start_sample`] says which sample comes.
+    #[inline]
     pub fn for_pixel(spec: &SamplerSpec, seed: u64, pixel: u64, pass: u64) -> Self {
         let mut s = Sampler::new(seed, pixel, pass);
-        s.pattern = Pattern::new(spec, seed, pixel);
+        // Made once per pixel and pass: `independent` inline, a pattern's setup out of line.
+        if spec.kind != crate::sampler::SamplerKind::Independent {
+            s.pattern = Self::pattern_for(spec, seed, pixel);
+        }
         s
+    }
+
+    #[inline(never)]
+    fn pattern_for(spec: &SamplerSpec, seed: u64, pixel: u64) -> Option<Pattern> {
+        Pattern::new(spec, seed, pixel)
     }
 
     /// From a single 64-bit seed (tests and tools).

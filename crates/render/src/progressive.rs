@@ -159,6 +159,7 @@ pub fn render<I: Integrator>(
             .map(|k| integrator.begin_pass(scene, settings.seed, first + k))
             .collect();
         let t_round = Instant::now();
+        let cam_boundary = scene.camera_boundary();
         film.data_mut().par_chunks_mut(stride * w).enumerate().for_each(|(y, row)| {
             for (x, slot) in row.chunks_mut(stride).enumerate() {
                 let pixel = (y * w + x) as u64;
@@ -171,7 +172,7 @@ pub fn render<I: Integrator>(
                         // The reconstruction filter by importance sampling (see `PixelFilter`).
                         let pos = cam.sample_film_position(x as u32, y as u32, &mut sampler);
                         let ray = rays.sample(pos, &mut sampler);
-                        let medium = scene.camera_medium(&ray, cam.medium);
+                        let medium = cam_boundary.medium_towards(ray.d, cam.medium);
                         let mut r = integrator.radiance(scene, data, ray, medium, &mut sampler);
                         r.add(Component::Surface, integrator.pixel_light(data, pixel));
                         if !r.total().is_finite() {

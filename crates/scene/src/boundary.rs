@@ -310,11 +310,18 @@ impl Scene {
     /// directions into the box, whichever side its declared medium is).
     #[inline]
     pub fn camera_medium(&self, ray: &Ray, declared: Option<MediumId>) -> Option<MediumId> {
-        // Rays of a thin lens or an orthographic camera start apart: the declared medium.
+        self.camera_boundary().medium_towards(ray.d, declared)
+    }
+
+    /// The boundaries [`Self::camera_medium`] reads, for a render loop to find once and ask per
+    /// camera ray (`boundary.medium_towards(ray.d, declared)`, the same answer): none (the
+    /// declared medium) without media transitions or unless the camera is a pinhole, since rays
+    /// of a thin lens or an orthographic camera start apart.
+    pub fn camera_boundary(&self) -> Boundary {
         if !self.any_transition || !self.camera.is_pinhole() {
-            return declared;
+            return Boundary::default();
         }
-        self.pinhole_boundary().medium_towards(ray.d, declared)
+        self.pinhole_boundary()
     }
 
     /// The medium boundaries through the camera's pinhole, found once per pinhole position.

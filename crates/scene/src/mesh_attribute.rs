@@ -74,6 +74,10 @@ pub struct MeshAttribute {
     /// 1 (grey) or 3 (RGB) channels.
     pub dim: usize,
     corners: Vec<[Rgb; 3]>,
+    /// Smallest and largest channel value over the corners, computed once at binding:
+    /// [`Bsdf::is_black`](crate::bsdf::Bsdf::is_black) asks for it at every surface hit, and a
+    /// scan of the corners there would cost a mesh's size per hit.
+    range: (f32, f32),
 }
 
 impl MeshAttribute {
@@ -91,7 +95,7 @@ impl MeshAttribute {
             return None;
         }
         let rows = attr.values.len() / attr.dim;
-        let corners = if attr.is_vertex() {
+        let corners: Vec<[Rgb; 3]> = if attr.is_vertex() {
             if rows != vertex_count || indices.iter().flatten().any(|&i| i as usize >= rows) {
                 return None;
             }
@@ -102,7 +106,10 @@ impl MeshAttribute {
             }
             (0..rows).map(|f| [attr.rgb(f) * scale; 3]).collect()
         };
-        Some(MeshAttribute { name: attr.name.clone(), dim: attr.dim, corners })
+        let range = corners.iter().flatten().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), c: &Rgb| {
+            (lo.min(c.min_component()), hi.max(c.max_component()))
+        });
+        Some(MeshAttribute { name: attr.name.clone(), dim: attr.dim, corners, range })
     }
 
     /// The value at `at`: `b0 c0 + b1 c1 + b2 c2` over the triangle's corners (Mitsuba 3's
@@ -134,9 +141,7 @@ impl MeshAttribute {
 
     /// Smallest and largest channel value anywhere (a blend of corners stays between them).
     pub fn range(&self) -> (f32, f32) {
-        self.corners.iter().flatten().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), c| {
-            (lo.min(c.min_component()), hi.max(c.max_component()))
-        })
+        self.range
     }
 }
 

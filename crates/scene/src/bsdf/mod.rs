@@ -166,7 +166,20 @@ impl Bsdf {
 
     /// True when the BSDF has no effect on light at all besides absorbing it
     /// (a black diffuse surface): paths end there.
+    #[inline]
     pub fn is_black(&self) -> bool {
+        match self {
+            Bsdf::Diffuse { reflectance: Texture::Constant(c) } => c.is_black(),
+            Bsdf::Diffuse { .. } | Bsdf::TwoSided(_) | Bsdf::Blend(_) | Bsdf::Perturbed(_) => {
+                self.nested_is_black()
+            }
+            _ => false,
+        }
+    }
+
+    // Out of line, as `nested_is_null`: asked at every surface hit, answered above without a
+    // call for a plain BSDF or a constant diffuse.
+    fn nested_is_black(&self) -> bool {
         match self {
             Bsdf::Diffuse { reflectance } => reflectance.is_black(),
             Bsdf::TwoSided(b) => b.is_black(),
