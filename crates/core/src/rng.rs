@@ -39,14 +39,9 @@ impl Sampler {
         let mut s = Sampler::new(seed, pixel, pass);
         // Made once per pixel and pass: `independent` inline, a pattern's setup out of line.
         if spec.kind != crate::sampler::SamplerKind::Independent {
-            s.pattern = Self::pattern_for(spec, seed, pixel);
+            s.pattern = Pattern::new(spec, seed, pixel);
         }
         s
-    }
-
-    #[inline(never)]
-    fn pattern_for(spec: &SamplerSpec, seed: u64, pixel: u64) -> Option<Pattern> {
-        Pattern::new(spec, seed, pixel)
     }
 
     /// From a single 64-bit seed (tests and tools).

@@ -304,34 +304,18 @@ impl Scene {
         true
     }
 
-    /// The medium of a camera ray `ray` whose camera declares `declared`: `declared`, unless
-    /// the camera's pinhole lies on medium boundaries, whose medium on the ray's side it is
-    /// then (`docs/theory.md` §14: a camera on the boundary of a fog box sees the fog in the
-    /// directions into the box, whichever side its declared medium is).
-    #[inline]
-    pub fn camera_medium(&self, ray: &Ray, declared: Option<MediumId>) -> Option<MediumId> {
-        self.camera_boundary().medium_towards(ray.d, declared)
-    }
-
-    /// The boundaries [`Self::camera_medium`] reads, for a render loop to find once and ask per
-    /// camera ray (`boundary.medium_towards(ray.d, declared)`, the same answer): none (the
-    /// declared medium) without media transitions or unless the camera is a pinhole, since rays
-    /// of a thin lens or an orthographic camera start apart.
+    /// The medium boundaries through the camera's pinhole, for a render loop to find once and
+    /// ask per camera ray: `camera_boundary().medium_towards(ray.d, declared)` is the medium of
+    /// a camera ray whose camera declares `declared` (`docs/theory.md` §14: a camera on the
+    /// boundary of a fog box sees the fog in the directions into the box, whichever side its
+    /// declared medium is). None, so the declared medium, without media transitions or unless
+    /// the camera is a pinhole: rays of a thin lens or an orthographic camera start apart.
     pub fn camera_boundary(&self) -> Boundary {
         if !self.any_transition || !self.camera.is_pinhole() {
             return Boundary::default();
         }
-        self.pinhole_boundary()
-    }
-
-    /// The medium boundaries through the camera's pinhole, found once per pinhole position.
-    fn pinhole_boundary(&self) -> Boundary {
-        let pinhole = self.camera.to_world.transform_point3(Vec3::ZERO);
-        match self.camera_boundary.get() {
-            Some((p, b)) if *p == pinhole => *b,
-            Some(_) => self.boundary_through(pinhole),
-            None => self.camera_boundary.get_or_init(|| (pinhole, self.boundary_through(pinhole))).1,
-        }
+        // A few probes: cheap once per round, and no cache to key by the camera's position.
+        self.boundary_through(self.camera.to_world.transform_point3(Vec3::ZERO))
     }
 
     /// The medium boundaries passing within the ray offset of the point `p`, found by probes

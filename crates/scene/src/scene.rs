@@ -116,8 +116,6 @@ pub struct Scene {
     pub(crate) touching: Vec<Vec<bool>>,
     /// Some shape declares media.
     pub(crate) any_transition: bool,
-    /// The camera's pinhole and the medium boundaries through it (`Scene::camera_medium`).
-    pub(crate) camera_boundary: OnceLock<(Vec3, crate::boundary::Boundary)>,
 }
 
 /// [`Scene::sealed`]: a shape is sealed when it is a closed surface
@@ -217,7 +215,6 @@ impl Scene {
             clear,
             touching,
             any_transition,
-            camera_boundary: OnceLock::new(),
         }
     }
 

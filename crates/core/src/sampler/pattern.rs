@@ -43,7 +43,9 @@ pub(crate) struct Pattern {
 
 impl Pattern {
     /// The pattern of `spec` for the pixel keyed `pixel` of a render seeded `seed`; `None` for
-    /// `independent`. Positioned at sample 0.
+    /// `independent`. Positioned at sample 0. Out of line: `Sampler::for_pixel`, made per pixel
+    /// and pass, inlines the independent case and calls this only for a pattern.
+    #[inline(never)]
     pub(crate) fn new(spec: &SamplerSpec, seed: u64, pixel: u64) -> Option<Pattern> {
         if spec.kind == SamplerKind::Independent {
             return None;
